@@ -1,0 +1,178 @@
+"""Rigged-asset extraction from a GltfDocument: bind-pose mesh, skin skeleton and per-vertex weights.
+
+Conventions follow the glTF skinning model: vertices are the skinned primitives' POSITION in mesh
+space, joint bind positions are the translations of inverse(inverseBindMatrix). Joint parents are the
+nearest ancestor node that is also a joint of the same skin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from simcore.errors import InvalidInput
+from simcore.io.gltf_document import GltfDocument
+from simcore.skeleton.types import Skeleton
+
+MODES_TRIANGLES = 4
+
+
+@dataclass
+class RiggedAsset:
+    """A skinned mesh at bind pose.
+
+    vertices: (V, 3) float64 bind-space positions of all skinned primitives, concatenated in file order.
+    faces:    (F, 3) int64 triangles indexing `vertices`.
+    skeleton: the skin's joints (bind positions, parents, node names).
+    weights:  (V, J) float32 CSR matrix, rows normalised to 1 where any weight exists.
+    joint_nodes: (J,) glTF node index of each joint.
+    bind_matrices: (J, 4, 4) float64 inverse of each inverse bind matrix (joint's bind transform).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    skeleton: Skeleton
+    weights: sp.csr_matrix
+    joint_nodes: np.ndarray
+    bind_matrices: np.ndarray
+
+
+def primitive_triangles(doc: GltfDocument, prim: dict, vertex_count: int) -> np.ndarray:
+    """(F, 3) int64 triangles of a primitive (indexed or not); non-triangle modes give (0, 3)."""
+    if prim.get("mode", MODES_TRIANGLES) != MODES_TRIANGLES:
+        return np.zeros((0, 3), np.int64)
+    if "indices" in prim:
+        idx = doc.accessor(prim["indices"]).reshape(-1).astype(np.int64)
+    else:
+        idx = np.arange(vertex_count, dtype=np.int64)
+    if len(idx) % 3:
+        raise InvalidInput("triangle index count is not a multiple of 3", code="invalid_gltf", field="mesh")
+    if len(idx) and (idx.min() < 0 or idx.max() >= vertex_count):
+        raise InvalidInput("triangle index out of range", code="invalid_gltf", field="mesh")
+    return idx.reshape(-1, 3)
+
+
+def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.ndarray, np.ndarray]:
+    skin = doc.items("skins")[skin_index]
+    joints = np.asarray(skin.get("joints", []), dtype=np.int64)
+    if len(joints) == 0:
+        raise InvalidInput("skin has no joints", code="invalid_gltf", field="mesh")
+    if "inverseBindMatrices" in skin:
+        ibm = doc.accessor(skin["inverseBindMatrices"]).astype(np.float64).reshape(-1, 4, 4).transpose(0, 2, 1)
+        if len(ibm) != len(joints):
+            raise InvalidInput("inverseBindMatrices count differs from joints", code="invalid_gltf", field="mesh")
+        bind = np.linalg.inv(ibm)
+    else:
+        bind = doc.world_matrices()[joints]
+    node_parents = doc.node_parents()
+    slot = {int(n): k for k, n in enumerate(joints)}
+    parents = []
+    for n in joints:
+        p = int(node_parents[n])
+        while p >= 0 and p not in slot:
+            p = int(node_parents[p])
+        parents.append(slot[p] if p >= 0 else -1)
+    nodes = doc.items("nodes")
+    names = [str(nodes[n].get("name") or f"joint{k}") for k, n in enumerate(joints)]
+    names = _unique(names)
+    order = _topological_order(np.asarray(parents))
+    skeleton = Skeleton(bind[:, :3, 3], np.asarray(parents), names)
+    if len(np.flatnonzero(skeleton.parents < 0)) > 1:
+        skeleton = _join_roots(skeleton)
+    return skeleton, joints, bind if order is None else bind
+
+
+def _unique(names: list[str]) -> list[str]:
+    seen: dict[str, int] = {}
+    out = []
+    for n in names:
+        k = seen.get(n, 0)
+        seen[n] = k + 1
+        out.append(n if k == 0 else f"{n}.{k}")
+    return out
+
+
+def _topological_order(parents: np.ndarray) -> np.ndarray | None:
+    """None when parents already precede children, else an order that makes them."""
+    if np.all(parents < np.arange(len(parents))):
+        return None
+    order, placed = [], np.zeros(len(parents), bool)
+    while len(order) < len(parents):
+        for j, p in enumerate(parents):
+            if not placed[j] and (p < 0 or placed[p]):
+                order.append(j)
+                placed[j] = True
+    return np.asarray(order)
+
+
+def _join_roots(skeleton: Skeleton) -> Skeleton:
+    """Several skin roots: keep them as a forest under the first root (glTF allows forests, our tree does not)."""
+    parents = skeleton.parents.copy()
+    roots = np.flatnonzero(parents < 0)
+    parents[roots[1:]] = roots[0]
+    return Skeleton(skeleton.positions, parents, skeleton.names, skeleton.kinds)
+
+
+def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
+    """Extract the skinned mesh of the skin that covers most vertices; raise InvalidInput when none."""
+    nodes = doc.items("nodes")
+    meshes = doc.items("meshes")
+    skinned = [n for n in nodes if "skin" in n and "mesh" in n]
+    if not skinned:
+        raise InvalidInput("the file has no skinned mesh", code="no_skin", field="mesh")
+    counts: dict[int, int] = {}
+    for n in skinned:
+        for prim in meshes[n["mesh"]].get("primitives", []):
+            if "JOINTS_0" in prim.get("attributes", {}):
+                counts[n["skin"]] = counts.get(n["skin"], 0) + doc.items("accessors")[prim["attributes"]["POSITION"]]["count"]
+    if not counts:
+        raise InvalidInput("skinned meshes carry no JOINTS_0", code="no_skin", field="mesh")
+    skin_index = max(counts, key=counts.get)
+    skeleton, joints, bind = _skin_skeleton(doc, skin_index)
+    j = skeleton.num_joints
+    verts, faces, rows, cols, vals = [], [], [], [], []
+    offset = 0
+    for n in skinned:
+        if n["skin"] != skin_index:
+            continue
+        for prim in meshes[n["mesh"]].get("primitives", []):
+            attrs = prim.get("attributes", {})
+            if "POSITION" not in attrs or "JOINTS_0" not in attrs:
+                continue
+            v = doc.accessor(attrs["POSITION"]).astype(np.float64)
+            faces.append(primitive_triangles(doc, prim, len(v)) + offset)
+            s = 0
+            while f"JOINTS_{s}" in attrs and f"WEIGHTS_{s}" in attrs:
+                ji = doc.accessor(attrs[f"JOINTS_{s}"]).astype(np.int64)
+                wi = doc.accessor(attrs[f"WEIGHTS_{s}"]).astype(np.float64)
+                if ji.shape != (len(v), 4) or wi.shape != (len(v), 4):
+                    raise InvalidInput("JOINTS/WEIGHTS must be VEC4 per vertex", code="invalid_gltf", field="mesh")
+                if ji.size and ji.max() >= j:
+                    raise InvalidInput("JOINTS_n index beyond the skin's joints", code="invalid_gltf", field="mesh")
+                keep = wi > 0
+                rows.append(np.broadcast_to(np.arange(len(v))[:, None] + offset, ji.shape)[keep])
+                cols.append(ji[keep])
+                vals.append(wi[keep])
+                s += 1
+            verts.append(v)
+            offset += len(v)
+    vertices = np.concatenate(verts)
+    w = sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(vertices), j)
+    )
+    sums = np.asarray(w.sum(axis=1)).ravel()
+    w = sp.diags(np.where(sums > 0, 1.0 / np.maximum(sums, 1e-12), 0.0)) @ w
+    return RiggedAsset(vertices, np.concatenate(faces), skeleton, w.astype(np.float32).tocsr(), joints, bind)
+
+
+def used_joints(skeleton: Skeleton, weights: sp.csr_matrix, eps: float = 1e-6) -> np.ndarray:
+    """(J,) bool: joints that influence a vertex or have a descendant that does."""
+    keep = np.asarray(weights.max(axis=0).todense()).ravel() > eps
+    for jnt in np.flatnonzero(keep):
+        p = skeleton.parents[jnt]
+        while p >= 0 and not keep[p]:
+            keep[p] = True
+            p = skeleton.parents[p]
+    return keep

@@ -1,0 +1,57 @@
+"""Job options: one validated model shared by the API, the CLI and the pipeline (no torch import here)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+Axis = Literal["x", "y", "z", "-x", "-y", "-z"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class MotionOptions(_Strict):
+    """Motion clip selection and retargeting."""
+
+    clip: str | int | None = Field(None, description="clip name or index in the motion file (or in the mesh upload)")
+    joint_map: dict[str, str] = Field(default_factory=dict, description="source joint name → target joint name overrides")
+    in_place: bool = Field(False, description="remove root horizontal translation")
+    fps: float | None = Field(None, gt=0, le=240, description="resample to this frame rate (default: the clip's)")
+    start: float | None = Field(None, ge=0, description="clip start time, seconds")
+    end: float | None = Field(None, gt=0, description="clip end time, seconds")
+    loop: bool = False
+    unit_scale: float | None = Field(None, gt=0, description="override the guessed BVH unit → metres scale")
+
+
+class RefineOptions(_Strict):
+    """PhysRig MLS-MPM refinement of the animated result."""
+
+    enabled: bool = False
+    preset: Literal["flesh", "muscle", "fat", "rubber", "stiff"] = "flesh"
+    drivers: Literal["joints", "bones"] = "bones"
+    grid: int = Field(64, ge=16, le=128)
+    substeps: int = Field(100, ge=1, le=400, description="substeps per 25 fps frame")
+    prototypes: int = Field(25, ge=1, le=200)
+    max_particles: int | None = Field(None, ge=1000, le=500_000)
+    bone_stiffness: dict[str, float] = Field(default_factory=dict, description="joint name → Young's modulus multiplier")
+
+
+class JobOptions(_Strict):
+    """Everything a job can be asked to do; every field has a working default."""
+
+    skeleton: Literal["auto", "geometric", "humanoid", "keep"] = "auto"
+    max_joints: int = Field(64, ge=2, le=256)
+    up_axis: Axis | None = Field(None, description="override the input's up axis (glTF input is +Y up)")
+    forward_axis: Axis | None = Field(None, description="override the facing direction used by the humanoid fit")
+    units: Literal["auto", "m", "cm", "mm", "in"] = "auto"
+    skinning: Literal["auto", "geodesic", "heat"] = "auto"
+    max_influences: Literal[4, 8] = 4
+    smooth_iterations: int = Field(2, ge=0, le=50)
+    motion: MotionOptions = Field(default_factory=MotionOptions)
+    refine: RefineOptions = Field(default_factory=RefineOptions)
+    stages: list[Literal["skeleton", "skin", "motion", "refine", "export"]] | None = Field(
+        None, description="run only up to these stages (default: all that apply)"
+    )

@@ -1,0 +1,109 @@
+"""The rigging pipeline: ordered stages over one PipelineState, with progress and cancel checks.
+
+Each stage module exposes `run(state: PipelineState, progress: StageProgress) -> None`, reads what
+earlier stages left on the state and writes its own fields and artifacts into `state.workdir`.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from simcore.options import JobOptions
+
+if TYPE_CHECKING:
+    import numpy as np
+    import scipy.sparse as sp
+
+    from simcore.ingest import IngestedMesh
+    from simcore.motion.types import JointAnimation
+    from simcore.skeleton.types import Skeleton
+
+ProgressCallback = Callable[[str, float], None]  # (stage name, overall fraction 0..1)
+CancelCheck = Callable[[], None]  # raises simcore.errors.Canceled when the job was canceled
+
+
+@dataclass
+class PipelineInputs:
+    """Uploaded files, already stored and sniffed. Formats: glb, gltf, obj, ply, stl, bvh."""
+
+    mesh_path: Path
+    mesh_format: str
+    motion_path: Path | None = None
+    motion_format: str | None = None
+
+
+@dataclass
+class PipelineState:
+    """Everything stages share. `report` becomes report.json; `artifacts` maps name → file in workdir."""
+
+    inputs: PipelineInputs
+    options: JobOptions
+    workdir: Path
+    report: dict[str, Any] = field(default_factory=dict)
+    artifacts: dict[str, Path] = field(default_factory=dict)
+    mesh: "IngestedMesh | None" = None
+    skeleton: "Skeleton | None" = None
+    weights: "sp.csr_matrix | None" = None  # (V, J) float32, rows sum to 1
+    animation: "JointAnimation | None" = None
+    refined_frames: "np.ndarray | None" = None  # (T, V, 3) float32 simulated vertex positions
+
+    def warn(self, message: str) -> None:
+        """Record a user-facing warning in report.json."""
+        self.report.setdefault("warnings", []).append(message)
+
+
+class StageProgress:
+    """Maps a stage's own 0..1 progress onto the job's overall progress and checks for cancel."""
+
+    def __init__(self, name: str, start: float, span: float, report: ProgressCallback, check_cancel: CancelCheck):
+        self.name, self._start, self._span = name, start, span
+        self._report, self._check_cancel = report, check_cancel
+
+    def __call__(self, fraction: float) -> None:
+        self._report(self.name, self._start + self._span * min(max(fraction, 0.0), 1.0))
+
+    def check_cancel(self) -> None:
+        self._check_cancel()
+
+
+def _stages() -> list[tuple[str, float, Callable[[PipelineState, StageProgress], None]]]:
+    """(name, relative cost, run) in execution order; imported lazily so the API never loads torch."""
+    from simcore import ingest
+
+    return [
+        ("ingest", 1.0, ingest.run),
+    ]
+
+
+def run_pipeline(
+    inputs: PipelineInputs,
+    options: JobOptions,
+    workdir: Path,
+    on_progress: ProgressCallback = lambda stage, fraction: None,
+    check_cancel: CancelCheck = lambda: None,
+) -> PipelineState:
+    """Run every applicable stage, write report.json, return the final state (artifacts in workdir)."""
+    workdir.mkdir(parents=True, exist_ok=True)
+    state = PipelineState(inputs, options, workdir)
+    stages = _stages()
+    total = sum(cost for _, cost, _ in stages)
+    done = 0.0
+    timings: dict[str, float] = {}
+    for name, cost, run in stages:
+        check_cancel()
+        started = time.perf_counter()
+        on_progress(name, done / total)
+        run(state, StageProgress(name, done / total, cost / total, on_progress, check_cancel))
+        timings[name] = round(time.perf_counter() - started, 3)
+        done += cost
+    state.report["timings_s"] = timings
+    report_path = workdir / "report.json"
+    report_path.write_text(json.dumps(state.report, indent=2, default=str))
+    state.artifacts["report.json"] = report_path
+    on_progress("done", 1.0)
+    return state

@@ -1,0 +1,112 @@
+"""The skeleton tree: rest-pose joints, parents, names and joint kinds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from simcore.errors import InvalidInput
+
+
+class JointKind(str, Enum):
+    """What a joint belongs to; drives tokenisation (template parts, spring chains)."""
+
+    BODY = "body"  # Mixamo body template joint
+    HAND = "hand"  # Mixamo finger joint
+    SPRING = "spring"  # secondary chain (hair, tail, skirt)
+    FREE = "free"  # anything else
+
+
+@dataclass
+class Skeleton:
+    """A joint tree in rest pose.
+
+    positions: (J, 3) float64 world-space joint heads, metres, +Y up.
+    parents:   (J,) int64, root = -1, every parent index smaller than its child's.
+    names:     J unique joint names.
+    kinds:     J JointKind values.
+    orientations: optional (J, 4) float64 world rotation of each joint frame at bind, quaternion xyzw;
+               None means every joint frame is world-axis-aligned (our predicted skeletons). Kept for
+               studio rigs re-skinned in "keep" mode so their bind pose survives export.
+    """
+
+    positions: np.ndarray
+    parents: np.ndarray
+    names: list[str]
+    kinds: list[JointKind] = field(default_factory=list)
+    orientations: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        self.positions = np.asarray(self.positions, dtype=np.float64).reshape(-1, 3)
+        self.parents = np.asarray(self.parents, dtype=np.int64).reshape(-1)
+        self.names = [str(n) for n in self.names]
+        if not self.kinds:
+            self.kinds = [JointKind.FREE] * len(self.names)
+        self.kinds = [JointKind(k) for k in self.kinds]
+        if self.orientations is not None:
+            self.orientations = np.asarray(self.orientations, dtype=np.float64).reshape(-1, 4)
+
+    @property
+    def num_joints(self) -> int:
+        return int(self.positions.shape[0])
+
+    def validate(self) -> "Skeleton":
+        """Raise InvalidInput unless this is one finite, acyclic, rooted tree with unique names."""
+        j = self.num_joints
+        if j == 0:
+            raise InvalidInput("skeleton has no joints", field="skeleton")
+        if self.parents.shape != (j,) or len(self.names) != j or len(self.kinds) != j:
+            raise InvalidInput("skeleton arrays disagree in length", field="skeleton")
+        if not np.all(np.isfinite(self.positions)):
+            raise InvalidInput("skeleton has non-finite joint positions", field="skeleton")
+        roots = np.flatnonzero(self.parents < 0)
+        if len(roots) != 1 or roots[0] != 0:
+            raise InvalidInput(f"skeleton must have exactly one root at index 0, found {roots.tolist()}", field="skeleton")
+        if np.any(self.parents[1:] >= np.arange(1, j)) or np.any(self.parents[1:] < 0):
+            raise InvalidInput("skeleton parents must come before their children (acyclic, ordered)", field="skeleton")
+        if len(set(self.names)) != j:
+            raise InvalidInput("skeleton joint names are not unique", field="skeleton")
+        return self
+
+    def children(self) -> list[list[int]]:
+        """Child indices of every joint, in index order."""
+        out: list[list[int]] = [[] for _ in range(self.num_joints)]
+        for c, p in enumerate(self.parents):
+            if p >= 0:
+                out[int(p)].append(c)
+        return out
+
+    def bones(self) -> np.ndarray:
+        """(B, 2) int64 (parent, child) index pairs, one per non-root joint."""
+        child = np.flatnonzero(self.parents >= 0)
+        return np.stack([self.parents[child], child], axis=1)
+
+    def reordered(self, order: np.ndarray) -> "Skeleton":
+        """The same tree with joints in `order` (a permutation where parents precede children)."""
+        order = np.asarray(order, dtype=np.int64)
+        inverse = np.empty_like(order)
+        inverse[order] = np.arange(len(order))
+        parents = np.where(self.parents[order] >= 0, inverse[np.maximum(self.parents[order], 0)], -1)
+        orient = None if self.orientations is None else self.orientations[order]
+        return Skeleton(self.positions[order], parents, [self.names[i] for i in order], [self.kinds[i] for i in order], orient)
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (positions as lists)."""
+        return {
+            "names": list(self.names),
+            "parents": self.parents.tolist(),
+            "positions": self.positions.round(6).tolist(),
+            "kinds": [k.value for k in self.kinds],
+            "orientations": None if self.orientations is None else self.orientations.round(8).tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "Skeleton":
+        """Inverse of to_dict; validates."""
+        orient = data.get("orientations")
+        return cls(
+            np.asarray(data["positions"]), np.asarray(data["parents"]), data["names"], data.get("kinds") or [],
+            None if orient is None else np.asarray(orient),
+        ).validate()
