@@ -1,0 +1,44 @@
+"""The FastAPI application factory."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+from fastapi import FastAPI
+from fastapi.routing import APIRoute
+from fastapi.staticfiles import StaticFiles
+
+from api import errors, health
+from api.jobs.router import router as jobs_router
+from api.keys.router import router as keys_router
+from api.settings import get_settings
+from api.upload_limit import UploadLimit
+
+WEB_DIR = Path(__file__).resolve().parents[1] / "web"
+# Room for the multipart envelope and a motion file next to a mesh at the cap.
+BODY_SLACK_BYTES = 1024 * 1024
+
+
+def operation_id(route: APIRoute) -> str:
+    """Clean operation ids (`jobs-submit_job`) so generated clients read well."""
+    return f"{route.tags[0]}-{route.name}" if route.tags else route.name
+
+
+def create_app() -> FastAPI:
+    settings = get_settings()
+    settings.data_dir.mkdir(parents=True, exist_ok=True)
+    spool = settings.storage_dir / "tmp"
+    spool.mkdir(parents=True, exist_ok=True)
+    tempfile.tempdir = str(spool)  # multipart spooling stays inside the data directory
+    app = FastAPI(title="RigForge", version="0.1.0", generate_unique_id_function=operation_id,
+                  description="Automatic rigging and skinning of 3D characters.")
+    errors.install(app)
+    app.include_router(health.router)
+    app.include_router(jobs_router)
+    app.include_router(keys_router)
+    app.add_middleware(UploadLimit, max_bytes=2 * settings.max_upload_bytes + BODY_SLACK_BYTES)
+    dist = WEB_DIR / "dist"
+    if dist.is_dir():
+        app.mount("/", StaticFiles(directory=dist, html=True), name="web")
+    return app

@@ -1,0 +1,30 @@
+"""Bearer-key authentication as a FastAPI dependency."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends, Request
+
+from api.db import session_scope
+from api.errors import Problem
+from api.keys.service import find_active
+from api.models import ApiKey
+
+
+def current_key(request: Request) -> ApiKey:
+    """The active key named by `Authorization: Bearer <key>` (or `?key=` for EventSource/downloads)."""
+    header = request.headers.get("authorization", "")
+    scheme, _, secret = header.partition(" ")
+    if scheme.lower() != "bearer" or not secret:
+        secret = request.query_params.get("key", "")
+    if not secret:
+        raise Problem(401, "unauthorized", "send an API key as 'Authorization: Bearer <key>'", headers={"WWW-Authenticate": "Bearer"})
+    with session_scope() as session:
+        key = find_active(session, secret=secret.strip())
+    if key is None:
+        raise Problem(401, "unauthorized", "the API key is unknown or revoked", headers={"WWW-Authenticate": "Bearer"})
+    return key
+
+
+CurrentKey = Annotated[ApiKey, Depends(current_key)]

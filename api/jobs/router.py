@@ -1,0 +1,159 @@
+"""/api/v1/jobs: submit, inspect, list, cancel, download artifacts and follow progress (SSE)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import uuid
+from collections.abc import AsyncIterator
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, File, Form, Header, Query, Request, UploadFile
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import FileResponse, StreamingResponse
+from pydantic import ValidationError
+
+from api.auth import CurrentKey
+from api.db import session_scope
+from api.errors import Problem
+from api.jobs import service, state
+from api.jobs.schemas import JobOut, JobPage, JobStatus
+from api.jobs.uploads import store_upload
+from api.models import Job
+from api.queue import enqueue_job
+from api.settings import get_settings
+from api.storage import LocalStorage
+from simcore.options import JobOptions
+
+router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"])
+SSE_POLL_SECONDS = 0.3
+
+
+def parse_options(raw: str | None) -> JobOptions:
+    """Validate the `options` form field; errors name the offending option."""
+    if not raw:
+        return JobOptions()
+    try:
+        data = json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise Problem(422, "invalid_options", f"options is not valid JSON: {exc.msg} at char {exc.pos}", field="options") from None
+    if not isinstance(data, dict):
+        raise Problem(422, "invalid_options", "options must be a JSON object", field="options")
+    try:
+        return JobOptions.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        field = "options." + ".".join(str(p) for p in err["loc"])
+        raise Problem(422, "invalid_options", f"{field}: {err['msg']}", field=field) from None
+
+
+def base_url(request: Request) -> str:
+    return str(request.base_url).rstrip("/")
+
+
+def load_job(job_id: uuid.UUID, key: CurrentKey) -> Job:
+    """The caller's job or 404 (another key's job answers exactly like a missing one)."""
+    with session_scope() as session:
+        job = service.owned_job(session, job_id=job_id, owner_id=key.id)
+        if job is None:
+            raise Problem(404, "job_not_found", f"no job {job_id}")
+        return job
+
+
+OwnedJob = Annotated[Job, Depends(load_job)]
+
+
+@router.post("", status_code=202, response_model=JobOut, summary="Submit a mesh (and optional motion) for rigging")
+def submit_job(
+    request: Request,
+    key: CurrentKey,
+    mesh: Annotated[UploadFile, File(description="GLB, glTF (embedded buffers), OBJ, PLY or STL")],
+    motion: Annotated[UploadFile | None, File(description="BVH, or GLB/glTF carrying animation clips")] = None,
+    options: Annotated[str | None, Form(description="JobOptions as a JSON string")] = None,
+    idempotency_key: Annotated[str | None, Header(alias="Idempotency-Key", max_length=200)] = None,
+) -> JobOut:
+    job_options = parse_options(options)
+    settings = get_settings()
+    storage = LocalStorage(settings.storage_dir)
+    stored_mesh = store_upload(storage, mesh, kind="mesh", field="mesh", max_bytes=settings.max_upload_bytes)
+    stored_motion = store_upload(storage, motion, kind="motion", field="motion", max_bytes=settings.max_upload_bytes) if motion else None
+    with session_scope() as session:
+        try:
+            job, created = service.create_job(session, owner_id=key.id, mesh=stored_mesh, motion=stored_motion,
+                                              options=job_options, idempotency_key=idempotency_key)
+        except service.IdempotencyConflict:
+            raise Problem(409, "idempotency_conflict", "this Idempotency-Key was used with a different request",
+                          field="Idempotency-Key") from None
+        job_id = job.id
+    if created:
+        enqueue_job(job_id)
+    with session_scope() as session:
+        return service.to_schema(session.get(Job, job_id), base_url(request))
+
+
+@router.get("", response_model=JobPage, summary="List your jobs, newest first")
+def list_jobs(
+    request: Request, key: CurrentKey, status: JobStatus | None = None,
+    limit: Annotated[int, Query(ge=1, le=100)] = 20, cursor: str | None = None,
+) -> JobPage:
+    with session_scope() as session:
+        try:
+            jobs, next_cursor = service.list_jobs(session, owner_id=key.id, status=status, limit=limit, cursor=cursor)
+        except ValueError:
+            raise Problem(422, "invalid_cursor", "cursor is malformed", field="cursor") from None
+        return JobPage(items=[service.to_schema(j, base_url(request)) for j in jobs], next_cursor=next_cursor)
+
+
+@router.get("/{job_id}", response_model=JobOut, summary="One job's status, progress, error and artifacts")
+def get_job(request: Request, job: OwnedJob) -> JobOut:
+    return service.to_schema(job, base_url(request))
+
+
+@router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job")
+def cancel_job(request: Request, job: OwnedJob) -> JobOut:
+    with session_scope() as session:
+        if not state.cancel(session, job.id):
+            raise Problem(409, "job_finished", f"job is already {job.status}")
+        return service.to_schema(session.get(Job, job.id), base_url(request))
+
+
+@router.get("/{job_id}/artifacts/{name}", summary="Download an artifact", response_class=FileResponse)
+def download_artifact(job: OwnedJob, name: str) -> FileResponse:
+    artifact = next((a for a in job.artifacts if a.name == name), None)
+    if artifact is None:
+        raise Problem(404, "artifact_not_found", f"job has no artifact {name!r}")
+    return FileResponse(artifact.path, media_type=artifact.media_type, filename=artifact.name)
+
+
+def _snapshot(job_id: uuid.UUID, base: str) -> dict | None:
+    with session_scope() as session:
+        job = session.get(Job, job_id)
+        return None if job is None else service.to_schema(job, base).model_dump(mode="json")
+
+
+@router.get("/{job_id}/events", summary="Server-sent events: one per status/stage/progress change",
+            response_class=StreamingResponse)
+async def job_events(request: Request, job: OwnedJob) -> StreamingResponse:
+    base = base_url(request)
+
+    async def stream() -> AsyncIterator[str]:
+        last, idle = None, 0.0
+        while True:
+            snap = await run_in_threadpool(_snapshot, job.id, base)
+            if snap is None:
+                return
+            key = (snap["status"], snap["stage"], snap["progress"])
+            if key != last:
+                last, idle = key, 0.0
+                yield f"event: job\ndata: {json.dumps(snap)}\n\n"
+                if snap["status"] in state.TERMINAL:
+                    return
+            elif idle >= 15:
+                idle = 0.0
+                yield ": keep-alive\n\n"
+            if await request.is_disconnected():
+                return
+            await asyncio.sleep(SSE_POLL_SECONDS)
+            idle += SSE_POLL_SECONDS
+
+    return StreamingResponse(stream(), media_type="text/event-stream", headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})

@@ -1,0 +1,150 @@
+"""The job state machine. Every transition is a compare-and-set UPDATE, so concurrent workers, the
+reconciler and the API can never move one job twice; `attempts` is the fencing token of a run.
+
+queued → running → succeeded | failed | canceled;  queued → canceled;  running → queued (lease lost).
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+from datetime import datetime, timedelta, timezone
+
+from sqlalchemy import select, update
+from sqlalchemy.orm import Session
+
+from api.models import Artifact, Job
+
+TERMINAL = ("succeeded", "failed", "canceled")
+
+
+def now() -> datetime:
+    return datetime.now(timezone.utc)
+
+
+@dataclass(frozen=True)
+class Claim:
+    """A worker's right to run one attempt of a job."""
+
+    job_id: uuid.UUID
+    attempt: int
+    worker_id: str
+
+
+def claim(session: Session, job_id: uuid.UUID, worker_id: str, lease_seconds: float) -> Claim | None:
+    """queued → running, attempts+1. None if another delivery got there first or the job is not queued."""
+    job = session.get(Job, job_id)
+    if job is None or job.status != "queued":
+        return None
+    attempt = job.attempts + 1
+    t = now()
+    result = session.execute(
+        update(Job)
+        .where(Job.id == job_id, Job.status == "queued", Job.attempts == job.attempts)
+        .values(status="running", attempts=attempt, worker_id=worker_id, lease_expires_at=t + timedelta(seconds=lease_seconds),
+                started_at=t, stage="starting", progress=0.0, error_code=None, error_message=None)
+        .execution_options(synchronize_session=False)
+    )
+    session.commit()
+    return Claim(job_id, attempt, worker_id) if result.rowcount == 1 else None
+
+
+def _running(claim_: Claim):  # noqa: ANN202
+    return (Job.id == claim_.job_id, Job.status == "running", Job.attempts == claim_.attempt)
+
+
+def heartbeat(session: Session, claim_: Claim, lease_seconds: float) -> str | None:
+    """Extend the lease. Returns the job's status, or None when this attempt no longer owns the job."""
+    result = session.execute(
+        update(Job).where(*_running(claim_)).values(lease_expires_at=now() + timedelta(seconds=lease_seconds))
+        .execution_options(synchronize_session=False)
+    )
+    session.commit()
+    if result.rowcount == 1:
+        return "running"
+    job = session.get(Job, claim_.job_id)
+    session.refresh(job) if job is not None else None
+    return None if job is None or job.attempts != claim_.attempt else job.status
+
+
+def report_progress(session: Session, claim_: Claim, stage: str, progress: float) -> bool:
+    """Record stage/progress; False when this attempt lost the job (canceled, re-queued)."""
+    result = session.execute(
+        update(Job).where(*_running(claim_)).values(stage=stage, progress=round(float(progress), 4))
+        .execution_options(synchronize_session=False)
+    )
+    session.commit()
+    return result.rowcount == 1
+
+
+def succeed(session: Session, claim_: Claim, artifacts: list[dict]) -> bool:
+    """running → succeeded with its artifact rows, in one transaction. False if this attempt lost the job."""
+    result = session.execute(
+        update(Job).where(*_running(claim_))
+        .values(status="succeeded", stage="done", progress=1.0, finished_at=now(), lease_expires_at=None)
+        .execution_options(synchronize_session=False)
+    )
+    if result.rowcount != 1:
+        session.rollback()
+        return False
+    session.add_all(Artifact(job_id=claim_.job_id, **a) for a in artifacts)
+    session.commit()
+    return True
+
+
+def fail(session: Session, claim_: Claim, code: str, message: str) -> bool:
+    """running → failed with a stable code and a human message."""
+    result = session.execute(
+        update(Job).where(*_running(claim_))
+        .values(status="failed", finished_at=now(), lease_expires_at=None, error_code=code, error_message=message[:4000])
+        .execution_options(synchronize_session=False)
+    )
+    session.commit()
+    return result.rowcount == 1
+
+
+def cancel(session: Session, job_id: uuid.UUID) -> bool:
+    """queued|running → canceled. A running worker notices at its next stage boundary or heartbeat."""
+    result = session.execute(
+        update(Job).where(Job.id == job_id, Job.status.in_(("queued", "running")))
+        .values(status="canceled", finished_at=now(), lease_expires_at=None, error_code="canceled", error_message="canceled by the user")
+        .execution_options(synchronize_session=False)
+    )
+    session.commit()
+    return result.rowcount == 1
+
+
+def mark_enqueued(session: Session, job_id: uuid.UUID) -> None:
+    session.execute(update(Job).where(Job.id == job_id).values(enqueued_at=now()).execution_options(synchronize_session=False))
+    session.commit()
+
+
+def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float) -> tuple[list[uuid.UUID], list[uuid.UUID]]:
+    """Recover lost work. Returns (job ids to (re-)enqueue, job ids failed as worker_lost).
+
+    A running job whose lease expired goes back to queued (or fails past max_attempts); a queued job
+    not picked up for `requeue_after_seconds` is re-sent (a duplicate delivery is harmless: claim is a CAS).
+    """
+    t = now()
+    requeue, lost = [], []
+    expired = session.execute(select(Job.id, Job.attempts).where(Job.status == "running", Job.lease_expires_at < t)).all()
+    for job_id, attempts in expired:
+        done = attempts >= max_attempts
+        values = (
+            dict(status="failed", finished_at=t, lease_expires_at=None, error_code="worker_lost",
+                 error_message=f"the worker running this job stopped responding {attempts} times")
+            if done else dict(status="queued", stage="requeued", lease_expires_at=None, worker_id=None, enqueued_at=t)
+        )
+        result = session.execute(
+            update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, Job.lease_expires_at < t)
+            .values(**values).execution_options(synchronize_session=False)
+        )
+        if result.rowcount == 1:
+            (lost if done else requeue).append(job_id)
+    stale = t - timedelta(seconds=requeue_after_seconds)
+    for (job_id,) in session.execute(select(Job.id).where(Job.status == "queued", Job.enqueued_at < stale)).all():
+        session.execute(update(Job).where(Job.id == job_id, Job.status == "queued").values(enqueued_at=t)
+                        .execution_options(synchronize_session=False))
+        requeue.append(job_id)
+    session.commit()
+    return requeue, lost

@@ -1,0 +1,72 @@
+"""All service settings: one pydantic-settings object, environment variables prefixed RIGFORGE_."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, Field, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+
+class JobSettings(BaseModel):
+    """Durability knobs of the job system (RIGFORGE_JOBS__<NAME>)."""
+
+    lease_seconds: float = Field(60.0, gt=0, description="a running job whose lease is older than this is presumed lost")
+    heartbeat_seconds: float = Field(10.0, gt=0, description="how often a worker renews its lease")
+    max_attempts: int = Field(3, ge=1, description="deliveries before a lost job fails with worker_lost")
+    soft_time_limit: int = Field(3300, gt=0, description="seconds before a job is asked to stop (fails with timeout)")
+    time_limit: int = Field(3600, gt=0, description="seconds before the worker process running a job is killed")
+    reconcile_seconds: float = Field(15.0, gt=0, description="period of the reconciler that re-queues lost jobs")
+    requeue_after_seconds: float = Field(120.0, gt=0, description="re-send a queued job whose message may be lost")
+
+
+class Settings(BaseSettings):
+    """Service configuration; every field is documented in the README."""
+
+    model_config = SettingsConfigDict(env_prefix="RIGFORGE_", env_nested_delimiter="__", extra="ignore")
+
+    env: Literal["development", "production"] = "development"
+    data_dir: Path = Field(Path(".rigforge"), description="database, broker queue and file storage of the embedded default")
+    database_url: str | None = Field(None, description="SQLAlchemy URL; default sqlite in data_dir")
+    broker_url: str = Field("filesystem://", description="Celery broker; filesystem:// keeps the queue in data_dir")
+    max_upload_mb: float = Field(200.0, gt=0, description="hard cap on one upload request body")
+    max_vertices: int = Field(2_000_000, gt=0, description="meshes with more vertices are refused")
+    mpm_max_particles: int = Field(30_000, gt=0, description="particle budget of physics refinement per job")
+    host: str = "127.0.0.1"
+    port: int = 8000
+    jobs: JobSettings = Field(default_factory=JobSettings)
+
+    @model_validator(mode="after")
+    def _resolve(self) -> "Settings":
+        self.data_dir = self.data_dir.expanduser().resolve()
+        if self.env == "production" and (self.database_url is None or self.database_url.startswith("sqlite")):
+            raise ValueError("RIGFORGE_DATABASE_URL must name a server database in production")
+        return self
+
+    @property
+    def sqlalchemy_url(self) -> str:
+        return self.database_url or f"sqlite:///{self.data_dir / 'rigforge.db'}"
+
+    @property
+    def storage_dir(self) -> Path:
+        return self.data_dir / "storage"
+
+    @property
+    def broker_dir(self) -> Path:
+        return self.data_dir / "broker"
+
+    @property
+    def local_key_file(self) -> Path:
+        return self.data_dir / "local-api-key"
+
+    @property
+    def max_upload_bytes(self) -> int:
+        return int(self.max_upload_mb * 1024 * 1024)
+
+
+@lru_cache
+def get_settings() -> Settings:
+    """The process-wide settings (tests clear this cache after changing the environment)."""
+    return Settings()

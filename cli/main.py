@@ -1,0 +1,22 @@
+"""The `rigforge` command line."""
+
+from __future__ import annotations
+
+import typer
+
+from cli import keys, rig, server, submit, validate
+
+app = typer.Typer(help="RigForge: automatic rigging and skinning.", no_args_is_help=True, pretty_exceptions_enable=False)
+eval_app = typer.Typer(help="Quality evaluations on a directory of rigged assets.", no_args_is_help=True)
+
+app.command()(server.serve)
+app.command()(server.worker)
+app.command()(server.migrate)
+app.add_typer(keys.app, name="keys")
+app.command()(rig.rig)
+app.command()(submit.submit)
+app.command()(validate.validate)
+app.add_typer(eval_app, name="eval")
+
+if __name__ == "__main__":
+    app()

@@ -1,0 +1,48 @@
+"""`rigforge rig INPUT`: the whole pipeline in-process, no server."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from pydantic import ValidationError
+
+from cli.progress import stage_bar
+
+
+def _read_format(path: Path, kind: str, field: str) -> str:
+    from simcore.io.sniff import require_kind, sniff
+
+    with path.open("rb") as f:
+        head = f.read(64 * 1024)
+    return require_kind(sniff(head, path.stat().st_size), kind, field)
+
+
+def rig(
+    input: Annotated[Path, typer.Argument(exists=True, dir_okay=False, help="mesh: GLB, glTF, OBJ, PLY or STL")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="output directory")] = Path("rigged"),
+    motion: Annotated[Path | None, typer.Option(exists=True, dir_okay=False, help="motion clip: BVH or GLB")] = None,
+    options: Annotated[str, typer.Option(help="JobOptions as JSON")] = "{}",
+) -> None:
+    """Rig one file locally and write the artifacts to OUTPUT."""
+    from simcore.errors import SimcoreError
+    from simcore.options import JobOptions
+    from simcore.pipeline import PipelineInputs, run_pipeline
+
+    try:
+        opts = JobOptions.model_validate(json.loads(options))
+    except (json.JSONDecodeError, ValidationError) as exc:
+        typer.echo(f"invalid --options: {exc}", err=True)
+        raise typer.Exit(2) from exc
+    try:
+        inputs = PipelineInputs(input, _read_format(input, "mesh", "mesh"),
+                                motion, _read_format(motion, "motion", "motion") if motion else None)
+        with stage_bar(input.name) as update:
+            state = run_pipeline(inputs, opts, output, update)
+    except SimcoreError as exc:
+        typer.echo(f"error [{exc.code}]{f' ({exc.field})' if exc.field else ''}: {exc}", err=True)
+        raise typer.Exit(1) from exc
+    for name, path in sorted(state.artifacts.items()):
+        typer.echo(f"{path}  ({path.stat().st_size} bytes)")

@@ -1,0 +1,86 @@
+"""`rigforge serve | worker | migrate`: run the service on the embedded default or scaled out."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from typing import Annotated
+
+import typer
+
+from api.settings import get_settings
+
+
+def migrate() -> None:
+    """Bring the database schema to the newest revision."""
+    from api.migrate import upgrade_head
+
+    upgrade_head()
+    typer.echo(f"database at head: {get_settings().sqlalchemy_url.split('@')[-1]}")
+
+
+def ensure_local_key() -> str | None:
+    """On a fresh embedded install, create a 'local' key and keep it in data_dir/local-api-key (mode 600)."""
+    from api.db import session_scope
+    from api.keys.service import create_key, list_keys
+
+    settings = get_settings()
+    path = settings.local_key_file
+    if path.exists():
+        return path.read_text().strip()
+    with session_scope() as session:
+        if list_keys(session):
+            return None
+        _, secret = create_key(session, name="local")
+    path.write_text(secret + "\n")
+    path.chmod(0o600)
+    return secret
+
+
+def worker(
+    concurrency: Annotated[int, typer.Option(help="parallel jobs in this worker")] = 1,
+    loglevel: Annotated[str, typer.Option(help="celery log level")] = "INFO",
+) -> None:
+    """Run a Celery worker (with the reconciler) for the configured broker."""
+    from worker.celery_app import QUEUE, make_celery
+
+    make_celery().worker_main([
+        "worker", f"--loglevel={loglevel}", f"--concurrency={concurrency}", "--pool=prefork", "-Q", QUEUE,
+        "--without-gossip", "--without-mingle", "--without-heartbeat", "--hostname", f"rigforge-{os.getpid()}@%h",
+    ])
+
+
+def _stop(child: subprocess.Popen, grace: float = 15.0) -> None:
+    if child.poll() is None:
+        child.send_signal(signal.SIGTERM)
+        try:
+            child.wait(grace)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+
+
+def serve(
+    host: Annotated[str | None, typer.Option(help="bind address (default RIGFORGE_HOST or 127.0.0.1)")] = None,
+    port: Annotated[int | None, typer.Option(help="port (default RIGFORGE_PORT or 8000)")] = None,
+    no_worker: Annotated[bool, typer.Option("--no-worker", help="API only (workers run elsewhere)")] = False,
+) -> None:
+    """Migrate, then serve the API and dashboard, with one embedded worker unless --no-worker."""
+    import uvicorn
+
+    settings = get_settings()
+    migrate()
+    secret = ensure_local_key()
+    if secret:
+        typer.echo(f"local API key (also in {settings.local_key_file}): {secret}")
+    child = None
+    if not no_worker:
+        child = subprocess.Popen([sys.executable, "-m", "cli.main", "worker"], start_new_session=True)
+    try:
+        uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
+                    log_level="info", timeout_graceful_shutdown=5)
+    finally:
+        if child is not None:
+            _stop(child)

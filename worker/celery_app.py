@@ -1,0 +1,61 @@
+"""The Celery application. Celery only delivers job ids; the job row is the source of truth.
+
+Config choices (why):
+- acks_late + prefetch 1: a message is acknowledged only after its task returns, and a worker holds at
+  most one job it has not started, so a crash loses no message it took.
+- no result backend: results live in the database row, not in Celery.
+- soft/hard time limits per job; the Redis visibility timeout is above the hard limit so Redis never
+  re-delivers a job that is still legitimately running.
+- filesystem:// (the embedded default) keeps the queue in files under the data directory: no server.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from celery import Celery
+
+from api.settings import Settings, get_settings
+
+TASK_NAME = "rigforge.run_job"
+QUEUE = "rigforge"
+
+
+def _broker_options(settings: Settings) -> tuple[str, dict]:
+    if settings.broker_url.startswith("filesystem://"):
+        folder = settings.broker_dir / "queue"
+        folder.mkdir(parents=True, exist_ok=True)
+        (settings.broker_dir / "processed").mkdir(parents=True, exist_ok=True)
+        return "filesystem://", {"data_folder_in": str(folder), "data_folder_out": str(folder),
+                                 "processed_folder": str(settings.broker_dir / "processed"), "store_processed": False}
+    return settings.broker_url, {"visibility_timeout": settings.jobs.time_limit + 300}
+
+
+@lru_cache
+def make_celery() -> Celery:
+    """Build the app from the current settings (cached per process)."""
+    settings = get_settings()
+    broker, options = _broker_options(settings)
+    app = Celery("rigforge", broker=broker, include=["worker.tasks"])
+    app.conf.update(
+        task_acks_late=True,
+        task_reject_on_worker_lost=True,
+        worker_prefetch_multiplier=1,
+        task_ignore_result=True,
+        result_backend=None,
+        task_default_queue=QUEUE,
+        task_soft_time_limit=settings.jobs.soft_time_limit,
+        task_time_limit=settings.jobs.time_limit,
+        broker_transport_options=options,
+        broker_connection_retry_on_startup=True,
+        worker_hijack_root_logger=False,
+        worker_enable_remote_control=not broker.startswith("filesystem"),  # fanout needs a real broker
+        task_serializer="json",
+        accept_content=["json"],
+    )
+    return app
+
+
+def enqueue(job_id: str) -> None:
+    """Send a job id to the workers."""
+    make_celery().send_task(TASK_NAME, args=[job_id], queue=QUEUE)
