@@ -52,6 +52,13 @@ def worker(
     ])
 
 
+def _die_with_parent() -> None:
+    """In the child: get SIGTERM when the parent dies (uvicorn re-raises SIGTERM, skipping `finally`)."""
+    import ctypes
+
+    ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # 1 = PR_SET_PDEATHSIG
+
+
 def _stop(child: subprocess.Popen, grace: float = 15.0) -> None:
     if child.poll() is None:
         child.send_signal(signal.SIGTERM)
@@ -77,10 +84,13 @@ def serve(
         typer.echo(f"local API key (also in {settings.local_key_file}): {secret}")
     child = None
     if not no_worker:
-        child = subprocess.Popen([sys.executable, "-m", "cli.main", "worker"], start_new_session=True)
+        child = subprocess.Popen([sys.executable, "-m", "cli.main", "worker"], start_new_session=True,
+                                 preexec_fn=_die_with_parent)
     try:
         uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
                     log_level="info", timeout_graceful_shutdown=5)
+    except KeyboardInterrupt:  # Ctrl-C: uvicorn re-raises SIGINT after its graceful shutdown
+        pass
     finally:
         if child is not None:
             _stop(child)

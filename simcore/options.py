@@ -37,6 +37,7 @@ class RefineOptions(_Strict):
     prototypes: int = Field(25, ge=1, le=200)
     max_particles: int | None = Field(None, ge=1000, le=500_000)
     bone_stiffness: dict[str, float] = Field(default_factory=dict, description="joint name → Young's modulus multiplier")
+    preroll_frames: int = Field(8, ge=0, le=100, description="frames easing from the bind pose into frame 0 before output")
 
 
 class JobOptions(_Strict):
@@ -53,5 +54,5 @@ class JobOptions(_Strict):
     motion: MotionOptions = Field(default_factory=MotionOptions)
     refine: RefineOptions = Field(default_factory=RefineOptions)
     stages: list[Literal["skeleton", "skin", "motion", "refine", "export"]] | None = Field(
-        None, description="run only up to these stages (default: all that apply)"
+        None, description="run only these stages after ingest (default: all; [] = ingest only)"
     )

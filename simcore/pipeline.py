@@ -73,10 +73,19 @@ class StageProgress:
 
 def _stages() -> list[tuple[str, float, Callable[[PipelineState, StageProgress], None]]]:
     """(name, relative cost, run) in execution order; imported lazily so the API never loads torch."""
-    from simcore import ingest
+    from simcore import export_stage, ingest
+    from simcore.motion import stage as motion_stage
+    from simcore.mpm import refine_stage
+    from simcore.skeleton import stage as skeleton_stage
+    from simcore.skinning import stage as skin_stage
 
     return [
         ("ingest", 1.0, ingest.run),
+        ("skeleton", 1.0, skeleton_stage.run),
+        ("skin", 1.0, skin_stage.run),
+        ("motion", 0.5, motion_stage.run),
+        ("refine", 4.0, refine_stage.run),  # optional PhysRig MPM; returns at once unless refine.enabled
+        ("export", 1.0, export_stage.run),  # keep last: writes and validates every output
     ]
 
 
@@ -90,7 +99,8 @@ def run_pipeline(
     """Run every applicable stage, write report.json, return the final state (artifacts in workdir)."""
     workdir.mkdir(parents=True, exist_ok=True)
     state = PipelineState(inputs, options, workdir)
-    stages = _stages()
+    wanted = options.stages
+    stages = [s for s in _stages() if wanted is None or s[0] == "ingest" or s[0] in wanted]
     total = sum(cost for _, cost, _ in stages)
     done = 0.0
     timings: dict[str, float] = {}

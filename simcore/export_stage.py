@@ -1,0 +1,109 @@
+"""Pipeline stage `export`: rigged / animated / refined GLB and UsdSkel files, each validated.
+
+Writes into state.workdir and state.artifacts:
+  rigged.glb, rigged.usdc, rigged.usdz         always (needs state.mesh, state.skeleton, state.weights)
+  animated.glb, animated.usdc                  when state.animation is set
+  refined.glb, refined.usdc                    when state.refined_frames is set (frames of that animation)
+Every GLB goes through the Khronos validator and every USD through usd-core's compliance checker;
+results land in report["validation"]. A file with validator errors fails the job (code
+`export_invalid`); a validator that is not installed is a report warning only.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from simcore.errors import SimcoreError
+
+if TYPE_CHECKING:
+    from simcore.pipeline import PipelineState, StageProgress
+
+
+class ExportInvalid(SimcoreError):
+    """An exported file failed its format validator: a bug on our side, reported as a job failure."""
+
+    code = "export_invalid"
+
+
+def _write_glbs(state: "PipelineState", progress: "StageProgress") -> list[Path]:
+    from simcore.io.glb_rig_writer import write_rigged_glb
+
+    mesh, k = state.mesh, int(state.options.max_influences)
+    plans: list[tuple[str, dict]] = [("rigged.glb", {})]
+    if state.animation is not None:
+        plans.append(("animated.glb", {"animation": state.animation}))
+        if state.refined_frames is not None:
+            plans.append(("refined.glb", {"animation": state.animation, "morph_frames": state.refined_frames}))
+    written = []
+    for i, (name, extra) in enumerate(plans):
+        progress.check_cancel()
+        path = state.workdir / name
+        result = write_rigged_glb(mesh.glb, state.skeleton, state.weights, max_influences=k, out_path=path, **extra)
+        if name == "rigged.glb":  # merged: the skin stage may already have put its quality scores there
+            state.report.setdefault("weights", {}).update(result.influences.stats)
+        state.report.setdefault("export", {})[name] = {k2: v for k2, v in result.stats.items() if k2 != "influences"}
+        state.artifacts[name] = path
+        written.append(path)
+        progress(0.4 * (i + 1) / len(plans))
+    return written
+
+
+def _write_usds(state: "PipelineState", progress: "StageProgress") -> list[Path]:
+    from simcore.io.usd_skel_writer import write_usd_skel
+
+    k = int(state.options.max_influences)
+    rigged = state.workdir / "rigged.usdc"
+    written = write_usd_skel(state.mesh.glb, state.skeleton, state.weights, rigged, max_influences=k,
+                             usdz_path=state.workdir / "rigged.usdz")
+    if state.animation is not None:
+        progress.check_cancel()
+        written += write_usd_skel(state.mesh.glb, state.skeleton, state.weights, state.workdir / "animated.usdc",
+                                  max_influences=k, animation=state.animation)
+        if state.refined_frames is not None:
+            progress.check_cancel()
+            written += write_usd_skel(state.mesh.glb, state.skeleton, state.weights, state.workdir / "refined.usdc",
+                                      max_influences=k, animation=state.animation,
+                                      refined_frames=state.refined_frames)
+    for path in written:
+        state.artifacts[path.name] = path
+    progress(0.7)
+    return written
+
+
+def _validate(state: "PipelineState", glbs: list[Path], usds: list[Path]) -> None:
+    from simcore.io.gltf_validate import ValidatorUnavailable, validate_gltf_files
+    from simcore.io.usd_validate import validate_usd_file
+
+    results = state.report.setdefault("validation", {})
+    failures = []
+    try:
+        for res in validate_gltf_files(glbs):
+            results[Path(res.path).name] = res.summary()
+            if not res.ok:
+                failures.append(f"{Path(res.path).name}: {res.messages[:3]}")
+    except ValidatorUnavailable as exc:
+        state.warn(f"glTF files not validated: {exc}")
+        results.update({p.name: {"skipped": str(exc)} for p in glbs})
+    for path in usds:
+        res = validate_usd_file(path)
+        results[path.name] = res.summary()
+        if not res.ok:
+            failures.append(f"{path.name}: {res.errors[:3]}")
+    if failures:
+        raise ExportInvalid("exported files failed validation: " + "; ".join(failures))
+
+
+def run(state: "PipelineState", progress: "StageProgress") -> None:
+    """Write, validate and register every export this job's state supports."""
+    if state.options.stages is not None and "export" not in state.options.stages:
+        return
+    if state.mesh is None or state.skeleton is None or state.weights is None:
+        state.warn("export skipped: the job produced no skeleton and weights")
+        return
+    if state.refined_frames is not None and state.animation is None:
+        state.warn("refined frames were dropped from the export: they need the animation they refine")
+    glbs = _write_glbs(state, progress)
+    usds = _write_usds(state, progress)
+    _validate(state, glbs, usds)
+    progress(1.0)

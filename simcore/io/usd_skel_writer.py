@@ -1,0 +1,207 @@
+"""UsdSkel export: rigged.usdc (+ .usdz), animated.usdc (SkelAnimation) and refined.usdc (time-sampled points).
+
+Layout written (metersPerUnit 1, upAxis Y, defaultPrim /Character):
+  /Character                SkelRoot
+  /Character/Skeleton       Skeleton: joints (USD-safe unique names as paths), bindTransforms, restTransforms
+  /Character/Animation      SkelAnimation (animated/refined only), the Skeleton's skel:animationSource
+  /Character/Geometry/<m>   Mesh per glTF triangle primitive: points, faceVertexIndices, normals, primvars:st,
+                            primvars:skel:jointIndices/jointWeights (elementSize = influences), geomBindTransform
+Refined files keep the skeleton and its animation but write the meshes' simulated positions as
+time-sampled points with no skin binding, so nothing skins them twice.
+Matrices: ours are column-vector 4x4; USD's Gf.Matrix4d is row-vector, hence the transposes. Quaternions:
+ours xyzw, USD's Gf.Quatf real-first. pxr is imported lazily (worker-only dependency).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.sparse as sp
+
+from simcore.errors import InvalidInput
+from simcore.io.gltf_rig import primitive_triangles
+from simcore.io.mesh_layout import MeshLayout, read_mesh_layout
+from simcore.io.skin_influences import Influences, top_influences
+from simcore.skeleton.kinematics import bind_matrices, rest_local_matrices
+from simcore.skeleton.types import Skeleton
+
+if TYPE_CHECKING:
+    from simcore.motion.types import JointAnimation
+
+ROOT = "/Character"
+
+
+def usd_identifier(name: str, taken: set[str]) -> str:
+    """A valid USD prim name from `name`, unique within `taken` (which it is added to)."""
+    base = re.sub(r"[^A-Za-z0-9_]", "_", name) or "joint"
+    if base[0].isdigit():
+        base = "_" + base
+    out, k = base, 1
+    while out in taken:
+        out, k = f"{base}_{k}", k + 1
+    taken.add(out)
+    return out
+
+
+def joint_paths(skeleton: Skeleton) -> list[str]:
+    """USD joint path tokens ("hips/spine/chest"), one per joint in skeleton order."""
+    taken: set[str] = set()
+    out: list[str] = []
+    for j, name in enumerate(skeleton.names):
+        token = usd_identifier(name, taken)
+        p = int(skeleton.parents[j])
+        out.append(token if p < 0 else f"{out[p]}/{token}")
+    return out
+
+
+def _matrices(mats: np.ndarray):
+    from pxr import Gf, Vt
+
+    return Vt.Matrix4dArray([Gf.Matrix4d(m.T.tolist()) for m in mats])
+
+
+def _base_color(doc, prim: dict) -> list[float] | None:
+    materials = doc.items("materials")
+    index = prim.get("material")
+    if index is None or not 0 <= int(index) < len(materials):
+        return None
+    factor = materials[int(index)].get("pbrMetallicRoughness", {}).get("baseColorFactor")
+    return [float(c) for c in factor[:3]] if factor else None
+
+
+def _define_meshes(stage, layout: MeshLayout, infl: Influences | None, skel_path: str | None) -> list:
+    """One UsdGeom.Mesh per triangle primitive; returns [(mesh, vertex slice)]."""
+    from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
+
+    doc, taken, out = layout.doc, set(), []
+    UsdGeom.Scope.Define(stage, f"{ROOT}/Geometry")
+    for s in layout.slices:
+        prim = doc.items("meshes")[s.mesh]["primitives"][s.primitive]
+        faces = primitive_triangles(doc, prim, s.count)
+        if len(faces) == 0:
+            continue  # points/lines primitives have no USD Mesh equivalent
+        name = usd_identifier(f"{layout.mesh_node_names[s.mesh]}_{s.primitive}", taken)
+        mesh = UsdGeom.Mesh.Define(stage, f"{ROOT}/Geometry/{name}")
+        rows = slice(s.start, s.start + s.count)
+        points = layout.vertices[rows].astype(np.float32)
+        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)))
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.astype(np.int32).reshape(-1)))
+        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*points.min(0).tolist()), Gf.Vec3f(*points.max(0).tolist())]))
+        attrs = prim.get("attributes", {})
+        if "NORMAL" in attrs:
+            mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(doc.accessor(attrs["NORMAL"]).astype(np.float32)))
+            mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        api = UsdGeom.PrimvarsAPI(mesh)
+        if "TEXCOORD_0" in attrs:
+            uv = doc.accessor(attrs["TEXCOORD_0"]).astype(np.float32)
+            uv[:, 1] = 1.0 - uv[:, 1]  # glTF's v runs down the image, USD's st up
+            st = api.CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
+            st.Set(Vt.Vec2fArray.FromNumpy(uv))
+        color = _base_color(doc, prim)
+        if color is not None:
+            mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set(Vt.Vec3fArray([Gf.Vec3f(*color)]))
+        if infl is not None and skel_path is not None:
+            binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
+            binding.CreateSkeletonRel().SetTargets([Sdf.Path(skel_path)])
+            k = infl.joints.shape[1]
+            binding.CreateJointIndicesPrimvar(False, k).Set(Vt.IntArray.FromNumpy(infl.joints[rows].astype(np.int32).reshape(-1)))
+            binding.CreateJointWeightsPrimvar(False, k).Set(Vt.FloatArray.FromNumpy(infl.weights[rows].reshape(-1)))
+            binding.CreateGeomBindTransformAttr(Gf.Matrix4d(1.0))
+        out.append((mesh, rows))
+    return out
+
+
+def _define_animation(stage, skeleton: Skeleton, joints: list[str], animation: "JointAnimation") -> str:
+    from pxr import Gf, UsdSkel, Vt
+
+    from simcore.io.joint_tracks import joint_tracks
+
+    tracks = joint_tracks(skeleton, animation)
+    anim = UsdSkel.Animation.Define(stage, f"{ROOT}/Animation")
+    anim.CreateJointsAttr(joints)
+    rot_attr, trans_attr = anim.CreateRotationsAttr(), anim.CreateTranslationsAttr()
+    anim.CreateScalesAttr().Set(Vt.Vec3hArray([Gf.Vec3h(1, 1, 1)] * skeleton.num_joints))
+    for t in range(len(tracks.times)):
+        q = tracks.rotations[t]
+        rot_attr.Set(Vt.QuatfArray([Gf.Quatf(float(w), float(x), float(y), float(z)) for x, y, z, w in q]), t)
+        trans_attr.Set(Vt.Vec3fArray.FromNumpy(tracks.translations[t].astype(np.float32)), t)
+    stage.SetTimeCodesPerSecond(float(animation.fps))
+    stage.SetFramesPerSecond(float(animation.fps))
+    stage.SetStartTimeCode(0)
+    stage.SetEndTimeCode(max(len(tracks.times) - 1, 0))
+    return str(anim.GetPath())
+
+
+def write_usd_skel(
+    mesh_glb: bytes,
+    skeleton: Skeleton,
+    weights: sp.spmatrix,
+    out_path: Path,
+    *,
+    max_influences: int = 4,
+    animation: "JointAnimation | None" = None,
+    refined_frames: np.ndarray | None = None,
+    usdz_path: Path | None = None,
+) -> list[Path]:
+    """Write a UsdSkel file (.usdc/.usda by extension) and optionally a .usdz package of it.
+
+    mesh_glb / skeleton / weights: as for write_rigged_glb ((V, J) weights in mesh.glb vertex order).
+    animation:      clip bound as the Skeleton's animationSource (time code k = frame k, at its fps).
+    refined_frames: (T, V, 3) float world positions at animation frames 0..T-1; written as time-sampled
+                    points on unbound meshes (needs `animation` for the time base).
+    Returns the written paths.
+    """
+    from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
+
+    skeleton.validate()
+    layout = read_mesh_layout(mesh_glb)
+    w = sp.csr_matrix(weights)
+    if w.shape != (len(layout.vertices), skeleton.num_joints):
+        raise InvalidInput(f"weights {w.shape} do not match {len(layout.vertices)} vertices x "
+                           f"{skeleton.num_joints} joints", code="export_shape_mismatch", field="weights")
+    if refined_frames is not None:
+        refined_frames = np.asarray(refined_frames, dtype=np.float32)
+        if animation is None or refined_frames.shape[1:] != layout.vertices.shape:
+            raise InvalidInput("refined frames need their animation and one position per vertex",
+                               code="export_shape_mismatch", field="refined_frames")
+    infl = top_influences(w, max_influences, layout.vertices, skeleton.positions)
+
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(stage, UsdGeom.LinearUnits.meters)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    root = UsdSkel.Root.Define(stage, ROOT)
+    stage.SetDefaultPrim(root.GetPrim())
+    Usd.ModelAPI(root.GetPrim()).SetKind(Kind.Tokens.component)
+    skel = UsdSkel.Skeleton.Define(stage, f"{ROOT}/Skeleton")
+    joints = joint_paths(skeleton)
+    skel.CreateJointsAttr(joints)
+    skel.CreateJointNamesAttr(list(skeleton.names))
+    skel.CreateBindTransformsAttr(_matrices(bind_matrices(skeleton)))
+    skel.CreateRestTransformsAttr(_matrices(rest_local_matrices(skeleton)))
+    if animation is not None:
+        anim_path = _define_animation(stage, skeleton, joints, animation)
+        UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([Sdf.Path(anim_path)])
+    bound = refined_frames is None
+    meshes = _define_meshes(stage, layout, infl if bound else None, str(skel.GetPath()) if bound else None)
+    if refined_frames is not None:
+        for mesh, rows in meshes:
+            attr = mesh.GetPointsAttr()
+            for t, frame in enumerate(refined_frames):
+                attr.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(frame[rows])), t)
+            lo, hi = refined_frames[:, rows].min((0, 1)), refined_frames[:, rows].max((0, 1))
+            mesh.GetExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))
+    out_path = Path(out_path)
+    out_path.unlink(missing_ok=True)
+    stage.GetRootLayer().Export(str(out_path))
+    written = [out_path]
+    if usdz_path is not None:
+        Path(usdz_path).unlink(missing_ok=True)
+        if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(out_path)), str(usdz_path)):
+            raise InvalidInput(f"could not package {out_path.name} as usdz", code="export_failed", field="usdz")
+        written.append(Path(usdz_path))
+    return written

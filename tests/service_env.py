@@ -1,0 +1,39 @@
+"""Point the service at a fresh data directory / database / broker and reset every cached singleton."""
+
+from __future__ import annotations
+
+import os
+from contextlib import contextmanager
+from pathlib import Path
+from collections.abc import Iterator
+
+
+def reset_singletons() -> None:
+    from api.db import reset_caches
+    from api.settings import get_settings
+    from worker.celery_app import make_celery
+
+    get_settings.cache_clear()
+    reset_caches()
+    make_celery.cache_clear()
+
+
+@contextmanager
+def service_env(data_dir: Path, **overrides: str) -> Iterator[None]:
+    """Environment for one test: RIGFORGE_DATA_DIR plus overrides (e.g. DATABASE_URL), migrated."""
+    from api.migrate import upgrade_head
+
+    env = {"RIGFORGE_DATA_DIR": str(data_dir), **{f"RIGFORGE_{k.upper()}": v for k, v in overrides.items()}}
+    saved = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    reset_singletons()
+    try:
+        upgrade_head()
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+        reset_singletons()

@@ -1,0 +1,56 @@
+"""Small generated rigs for the exporter tests: a textured capsule, a joint chain along it, smooth weights."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import trimesh
+from PIL import Image
+
+from simcore.motion.types import JointAnimation
+from simcore.skeleton.types import Skeleton
+
+
+def capsule_glb(height: float = 0.8, radius: float = 0.1, textured: bool = True) -> tuple[bytes, trimesh.Trimesh]:
+    """mesh.glb of a +Y capsule with normals and, when `textured`, cylindrical UVs and a 4x4 PNG base-colour texture."""
+    mesh = trimesh.creation.capsule(height=height, radius=radius, count=[12, 12])
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
+    if not textured:
+        return trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=True), mesh
+    v = mesh.vertices
+    uv = np.stack([(np.arctan2(v[:, 2], v[:, 0]) / (2 * np.pi)) % 1.0, (v[:, 1] - v[:, 1].min()) / np.ptp(v[:, 1])], 1)
+    image = Image.fromarray((np.arange(48, dtype=np.uint8).reshape(4, 4, 3) * 5))
+    mesh.visual = trimesh.visual.TextureVisuals(uv=uv, material=trimesh.visual.material.PBRMaterial(
+        baseColorTexture=image, baseColorFactor=[200, 180, 160, 255]))
+    data = trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=True)
+    return data, mesh
+
+
+def chain_skeleton(joints: int, height: float = 0.8) -> Skeleton:
+    """A straight chain of `joints` joints from y = -height/2 (root) to +height/2."""
+    y = np.linspace(-height / 2, height / 2, joints)
+    positions = np.stack([np.zeros(joints), y, np.zeros(joints)], 1)
+    return Skeleton(positions, np.arange(joints) - 1, [f"joint_{j}" for j in range(joints)])
+
+
+def falloff_weights(vertices: np.ndarray, skeleton: Skeleton, keep: int, width: float = 0.1) -> sp.csr_matrix:
+    """(V, J) weights ∝ exp(-|Δy| / width), keeping the `keep` largest per vertex, rows summing to 1."""
+    d = np.abs(vertices[:, 1:2] - skeleton.positions[None, :, 1])
+    w = np.exp(-d / width)
+    w[w < np.sort(w, axis=1)[:, -keep][:, None]] = 0.0
+    return sp.csr_matrix(w / w.sum(axis=1, keepdims=True))
+
+
+def bend_animation(skeleton: Skeleton, frames: int = 12, fps: float = 24.0) -> JointAnimation:
+    """Every non-root joint bends about z up to 30°, the root slides along x."""
+    angle = np.linspace(0, np.deg2rad(30), frames)
+    rot = np.zeros((frames, skeleton.num_joints, 4))
+    rot[..., 3] = 1.0
+    rot[:, 1:, 2] = np.sin(angle / 2)[:, None]
+    rot[:, 1:, 3] = np.cos(angle / 2)[:, None]
+    trans = np.zeros((frames, skeleton.num_joints, 3))
+    trans[:, 0] = skeleton.positions[0]
+    trans[:, 1:] = skeleton.positions[1:] - skeleton.positions[skeleton.parents[1:]]
+    trans[:, 0, 0] += np.linspace(0, 0.2, frames)
+    return JointAnimation(list(skeleton.names), fps, rot, trans, name="bend")
+

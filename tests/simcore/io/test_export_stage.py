@@ -1,0 +1,66 @@
+"""The export stage: every output written, validated, registered; validator errors fail the job."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
+
+from simcore import export_stage
+from simcore.geometry.mesh import IngestedMesh
+from simcore.io import gltf_validate
+from simcore.options import JobOptions
+from simcore.pipeline import PipelineInputs, PipelineState, StageProgress
+
+
+def _state(tmp_path, animated: bool) -> PipelineState:
+    glb, mesh = capsule_glb()
+    skeleton = chain_skeleton(4)
+    state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"), JobOptions(), tmp_path)
+    state.mesh = IngestedMesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), glb)
+    state.skeleton, state.weights = skeleton, falloff_weights(mesh.vertices, skeleton, keep=3)
+    if animated:
+        state.animation = bend_animation(skeleton, frames=6)
+        state.refined_frames = np.repeat(mesh.vertices[None].astype(np.float32), 6, axis=0)
+    return state
+
+
+def _progress(seen: list) -> StageProgress:
+    return StageProgress("export", 0.0, 1.0, lambda name, f: seen.append(f), lambda: None)
+
+
+def test_stage_writes_and_validates_every_output(tmp_path):
+    state, seen = _state(tmp_path, animated=True), []
+    export_stage.run(state, _progress(seen))
+    names = {"rigged.glb", "rigged.usdc", "rigged.usdz", "animated.glb", "animated.usdc", "refined.glb", "refined.usdc"}
+    assert names <= set(state.artifacts) and all(state.artifacts[n].is_file() for n in names)
+    assert set(state.report["validation"]) == names
+    assert all(v["errors"] == 0 for v in state.report["validation"].values()), state.report["validation"]
+    assert state.report["weights"]["vertices"] == state.weights.shape[0]
+    assert state.report["export"]["refined.glb"]["morph"]["targets"] == 6
+    assert seen[-1] == 1.0 and seen == sorted(seen)
+
+
+def test_validator_error_fails_the_job(tmp_path, monkeypatch):
+    state = _state(tmp_path, animated=False)
+    broken = lambda paths: [gltf_validate.ValidationResult(str(p), 1, 0, messages=[{"code": "X"}]) for p in paths]  # noqa: E731
+    monkeypatch.setattr(gltf_validate, "validate_gltf_files", broken)
+    with pytest.raises(export_stage.ExportInvalid) as err:
+        export_stage.run(state, _progress([]))
+    assert err.value.code == "export_invalid"
+
+
+def test_missing_validator_is_a_warning(tmp_path, monkeypatch):
+    state = _state(tmp_path, animated=False)
+    monkeypatch.setenv("RIGFORGE_GLTF_VALIDATOR", str(tmp_path / "nowhere"))
+    export_stage.run(state, _progress([]))
+    assert "skipped" in state.report["validation"]["rigged.glb"]
+    assert any("not validated" in w for w in state.report["warnings"])
+    assert state.report["validation"]["rigged.usdc"]["errors"] == 0
+
+
+def test_stage_without_weights_skips_with_a_warning(tmp_path):
+    state = _state(tmp_path, animated=False)
+    state.weights = None
+    export_stage.run(state, _progress([]))
+    assert not state.artifacts and state.report["warnings"]
