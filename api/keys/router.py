@@ -1,14 +1,24 @@
-"""/api/v1/keys: who am I (sign-in check for the dashboard)."""
+"""/api/v1/keys: who am I (the dashboard's sign-in check), and key management on the embedded default.
+
+Listing, creating and revoking keys over HTTP is allowed only when `settings.env == "development"`
+(the single-user embedded default); elsewhere keys are managed with `rigforge keys` on the server.
+"""
 
 from __future__ import annotations
 
 import uuid
 from datetime import datetime
+from typing import Annotated
 
-from fastapi import APIRouter
-from pydantic import BaseModel
+from fastapi import APIRouter, Depends
+from pydantic import BaseModel, Field
 
 from api.auth import CurrentKey
+from api.db import session_scope
+from api.errors import Problem
+from api.keys import service
+from api.models import ApiKey
+from api.settings import get_settings
 
 router = APIRouter(prefix="/api/v1/keys", tags=["keys"])
 
@@ -18,8 +28,55 @@ class KeyOut(BaseModel):
     name: str
     prefix: str
     created_at: datetime
+    revoked_at: datetime | None = None
+
+
+class KeyCreate(BaseModel):
+    name: str = Field(min_length=1, max_length=200, description="who or what uses this key")
+
+
+class KeyCreated(BaseModel):
+    key: KeyOut
+    secret: str = Field(description="the key itself; shown only in this response")
+
+
+def to_schema(row: ApiKey) -> KeyOut:
+    return KeyOut(id=row.id, name=row.name, prefix=row.prefix, created_at=row.created_at, revoked_at=row.revoked_at)
+
+
+def key_admin(key: CurrentKey) -> ApiKey:
+    """The signed-in key, when this deployment lets keys be managed over HTTP (development only)."""
+    if get_settings().env != "development":
+        raise Problem(403, "key_management_disabled",
+                      "keys are managed with `rigforge keys` on the server outside the embedded development default")
+    return key
+
+
+KeyAdmin = Annotated[ApiKey, Depends(key_admin)]
 
 
 @router.get("/me", response_model=KeyOut, summary="The key this request is signed with")
 def whoami(key: CurrentKey) -> KeyOut:
-    return KeyOut(id=key.id, name=key.name, prefix=key.prefix, created_at=key.created_at)
+    return to_schema(key)
+
+
+@router.get("", response_model=list[KeyOut], summary="List every key, oldest first (development only)")
+def list_keys(_: KeyAdmin) -> list[KeyOut]:
+    with session_scope() as session:
+        return [to_schema(k) for k in service.list_keys(session)]
+
+
+@router.post("", status_code=201, response_model=KeyCreated, summary="Create a key (development only)")
+def create_key(body: KeyCreate, _: KeyAdmin) -> KeyCreated:
+    with session_scope() as session:
+        row, secret = service.create_key(session, name=body.name.strip() or "unnamed")
+        return KeyCreated(key=to_schema(row), secret=secret)
+
+
+@router.post("/{key_id}/revoke", response_model=KeyOut, summary="Revoke a key (development only)")
+def revoke_key(key_id: uuid.UUID, _: KeyAdmin) -> KeyOut:
+    with session_scope() as session:
+        row = service.revoke(session, key_id_or_prefix=str(key_id))
+        if row is None:
+            raise Problem(404, "key_not_found", f"no key {key_id}")
+        return to_schema(row)

@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from simcore.skeleton.types import Skeleton
 
 
 @dataclass
@@ -35,3 +39,26 @@ class JointAnimation:
     @property
     def duration(self) -> float:
         return (self.num_frames - 1) / self.fps if self.num_frames > 1 else 0.0
+
+
+@dataclass
+class MotionClip:
+    """A source motion before retargeting: its own skeleton and that skeleton's local animation.
+
+    skeleton:  the source skeleton at rest (metres, +Y up); `orientations` set when joint frames are not
+               world-aligned at rest (glTF bind poses), None for BVH (rest local rotation = identity).
+    animation: JointAnimation in `skeleton`'s joint order.
+    rest_is_standing: True when the rest pose stands on the floor at the clip's origin (glTF bind poses),
+               so the rest pose anchors root motion and ground height; False for BVH, whose rest pose
+               floats at the origin (the first frame and the clip's lowest foot are used instead).
+    source_format: "bvh", "gltf", ... for the report.
+    unit_scale: factor applied to the file's units to get metres.
+    unit:      how unit_scale was chosen: a guessed unit name ("cm", "in", ...), "option" or "file".
+    """
+
+    skeleton: "Skeleton"
+    animation: JointAnimation
+    rest_is_standing: bool = False
+    source_format: str = "bvh"
+    unit_scale: float = 1.0
+    unit: str = "file"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pygltflib
 import pytest
-from rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore.io.glb_animation import morph_key_frames
 from simcore.io.glb_rig_writer import write_rigged_glb

@@ -9,7 +9,7 @@ import pygltflib
 import pytest
 import scipy.sparse as sp
 import trimesh
-from rig_export_fixtures import capsule_glb, chain_skeleton, falloff_weights
+from tests.simcore.io.rig_export_fixtures import capsule_glb, chain_skeleton, falloff_weights
 from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput

@@ -9,7 +9,7 @@ import json
 import struct
 
 import pytest
-from rig_export_fixtures import capsule_glb
+from tests.simcore.io.rig_export_fixtures import capsule_glb
 
 from simcore.io.gltf_validate import ValidatorUnavailable, validate_gltf_file, validate_gltf_files
 

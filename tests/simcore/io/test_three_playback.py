@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore.io.glb_rig_writer import write_rigged_glb
 from simcore.io.gltf_validate import node_binary

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore.io.joint_tracks import joint_tracks
 from simcore.io.usd_skel_writer import joint_paths, write_usd_skel

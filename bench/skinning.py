@@ -1,0 +1,96 @@
+"""Skinning speed on a large generated creature: skin (each method) + rigged GLB export, target ≤ 10 s.
+
+The creature: a 12-joint spine with six 8-joint limbs (60 joints) built as a soup of subdivided capsules
+(~50k vertices), ingested like an upload so vertex order is the exported file's. Prints a table and writes
+bench/results/skinning.json.
+
+  .venv/bin/python bench/skinning.py [--vertices 50000] [--methods auto geodesic heat]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+import trimesh
+from rich.console import Console
+from rich.table import Table
+
+from simcore.ingest import ingest
+from simcore.io.glb_rig_writer import write_rigged_glb
+from simcore.skeleton.types import Skeleton
+from simcore.skinning.predict import compute_weights
+
+TARGET_S = 10.0
+RESULTS = Path(__file__).resolve().parent / "results" / "skinning.json"
+
+
+def creature(target_vertices: int) -> tuple[bytes, Skeleton]:
+    """(GLB bytes of a capsule-soup creature, its 60-joint skeleton), about `target_vertices` vertices."""
+    pos, parents = [[0.0, 0.5, 0.0]], [-1]
+    for k in range(1, 12):  # spine along +Y
+        pos.append([0.0, 0.5 + 0.12 * k, 0.0])
+        parents.append(k - 1)
+    for limb in range(6):
+        attach = 3 + (limb // 2) * 3
+        angle = np.deg2rad(25.0 + 20.0 * (limb // 2)) * (1 if limb % 2 else -1)
+        direction = np.array([np.cos(angle) * (1 if limb % 2 else -1), -0.3, 0.2 * (limb // 2 - 1)])
+        direction /= np.linalg.norm(direction)
+        prev = attach
+        for k in range(8):
+            pos.append(list(np.asarray(pos[attach]) + direction * 0.1 * (k + 1)))
+            parents.append(prev)
+            prev = len(pos) - 1
+    pos_a = np.asarray(pos)
+    skeleton = Skeleton(pos_a, np.asarray(parents), [f"j{k:02d}" for k in range(len(pos))]).validate()
+    parts = []
+    for p, c in skeleton.bones():
+        a, b = pos_a[p], pos_a[c]
+        length = float(np.linalg.norm(b - a))
+        radius = 0.07 if c < 12 else 0.035
+        mesh = trimesh.creation.capsule(height=length, radius=radius, count=[16, 16])
+        mesh.apply_transform(trimesh.geometry.align_vectors([0.0, 0.0, 1.0], (b - a) / length))
+        mesh.apply_translation((a + b) / 2.0)
+        parts.append(mesh)
+    soup = trimesh.util.concatenate(parts)
+    edge = np.sqrt(soup.area / (target_vertices * 2.0 * 0.433))  # triangles ≈ 2 × vertices, equilateral area
+    v, f = trimesh.remesh.subdivide_to_size(soup.vertices, soup.faces, max_edge=edge * 2.3)
+    return trimesh.Trimesh(v, f, process=False).export(file_type="glb"), skeleton
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--vertices", type=int, default=50_000)
+    parser.add_argument("--methods", nargs="+", default=["geodesic", "heat", "auto"])
+    args = parser.parse_args()
+    glb, skeleton = creature(args.vertices)
+    mesh = ingest(glb, "glb")
+    rows = []
+    for method in args.methods:
+        started = time.perf_counter()
+        result = compute_weights(mesh.vertices, mesh.faces, skeleton, method=method)
+        skin_s = time.perf_counter() - started
+        started = time.perf_counter()
+        write_rigged_glb(mesh.glb, skeleton, result.weights)
+        export_s = time.perf_counter() - started
+        rows.append({
+            "method": method, "chosen": result.method, "vertices": len(mesh.vertices), "joints": skeleton.num_joints,
+            "skin_s": round(skin_s, 3), "export_glb_s": round(export_s, 3), "total_s": round(skin_s + export_s, 3),
+            "target_s": TARGET_S, "ok": skin_s + export_s <= TARGET_S,
+        })
+    table = Table(title=f"Skinning speed ({platform.processor() or platform.machine()}, target ≤ {TARGET_S:g} s skin + export)")
+    for key in rows[0]:
+        table.add_column(key, justify="right")
+    for row in rows:
+        table.add_row(*[str(v) for v in row.values()])
+    Console().print(table)
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    RESULTS.write_text(json.dumps({"rows": rows}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,70 @@
+"""`rigforge eval motion DIR [--artist-only] [--only NAME ...] [--json FILE]`: clip retargeting quality.
+
+Registered in cli/main.py as `eval_app.command("motion")(eval_motion.eval_motion)`.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from simcore.evaluation.motion_eval import MotionEvaluation, evaluate_motion
+
+
+def _fmt(value: float | None, digits: int) -> str:
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
+def render(report: MotionEvaluation, console: Console) -> None:
+    """One row per character × rig (artist self-check, ours), then the means."""
+    table = Table(title="Own clips retargeted artist rig → rig, LBS vertex error in unit-cube units; "
+                        "CMU 01_01 mocap foot sliding in heights/s")
+    for head in ("asset", "category", "rig", "clip", "frames", "joints", "mapped", "map"):
+        table.add_column(head)
+    for head in ("err mean", "err p95", "mocap slide", "contact", "s"):
+        table.add_column(head, justify="right")
+    for r in report.rows:
+        cells = [r.name, r.category, r.target, r.clip, str(r.frames), str(r.joints), str(r.mapped), r.method]
+        if r.error:
+            table.add_row(*cells, "error", "", "", "", _fmt(r.seconds, 1))
+            continue
+        table.add_row(*cells, _fmt(r.vertex_error, 4), _fmt(r.vertex_error_p95, 4), _fmt(r.mocap_sliding, 4),
+                      _fmt(r.mocap_contact, 3), _fmt(r.seconds, 1))
+    for target in ("artist", "ours"):
+        table.add_row("MEAN", "", target, "", "", "", "", "", _fmt(report.mean(target, "vertex_error"), 4),
+                      _fmt(report.mean(target, "vertex_error_p95"), 4), _fmt(report.mean(target, "mocap_sliding"), 4),
+                      "", "", style="bold")
+    console.print(table)
+    console.print(f"predictor: {report.predictor}")
+    for name, reason in report.skipped.items():
+        console.print(f"skipped {name}: {reason}")
+    for r in report.rows:
+        if r.error:
+            console.print(f"[red]{r.name} {r.target}: {r.error}[/red]")
+
+
+def eval_motion(
+    directory: Annotated[Path, typer.Argument(exists=True, file_okay=False, help="folder of rigged .glb/.gltf with clips (+ mocap_cmu_01_01.bvh)")],
+    artist_only: Annotated[bool, typer.Option(help="only the self-check onto the artist skeleton")] = False,
+    only: Annotated[list[str] | None, typer.Option(help="evaluate only these asset names")] = None,
+    json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
+) -> None:
+    """Retarget each character's own clip onto our predicted rig and compare with the artist's animation."""
+    console = Console()
+    with console.status("retargeting…") as status:
+        report = evaluate_motion(directory, use_predicted=not artist_only, only=set(only) if only else None,
+                                 on_asset=lambda n: status.update(f"retargeting {n}"))
+    render(report, console)
+    if json_path is not None:
+        json_path.parent.mkdir(parents=True, exist_ok=True)
+        json_path.write_text(json.dumps(report.to_dict(), indent=1))
+        console.print(f"wrote {json_path}")
+
+
+if __name__ == "__main__":
+    typer.run(eval_motion)

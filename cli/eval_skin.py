@@ -1,0 +1,86 @@
+"""`rigforge eval skin DIR [--method M] [--peers DIR] [--json FILE]`: skin-only evaluation on the assets' own skeletons.
+
+Registered in cli/main.py as `eval_app.command("skin")(eval_skin.eval_skin)`. Peer weights (Blender's) come
+from `bench/peers/blender_weights.py`, which writes bench/results/peers/blender/<asset>.npz; that folder's
+parent is the default --peers.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from simcore.evaluation.skin_eval import OUR_METHODS, SkinEvaluation, evaluate_skinning
+
+DEFAULT_PEERS = Path("bench/results/peers")
+FOUR = {"cesium_man", "fox", "rigged_figure", "rignet_17364_humanoid_a"}  # the issue's target subset
+
+
+def _fmt(value: float | None, digits: int) -> str:
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
+def _cells(metrics: dict) -> list[str]:
+    return [
+        _fmt(metrics.get("l1"), 3),
+        _fmt(metrics.get("precision"), 2),
+        _fmt(metrics.get("recall"), 2),
+        _fmt(metrics.get("deform_mean"), 4),
+        _fmt(metrics.get("deform_p95"), 4),
+        _fmt(metrics.get("clip_deform_mean"), 4),
+        _fmt(metrics.get("clip_deform_p95"), 4),
+        _fmt(metrics.get("seconds"), 2),
+    ]
+
+
+def render(report: SkinEvaluation, console: Console) -> None:
+    """Each asset's methods on consecutive rows (ours beside Blender's), then per-method means (all, the four)."""
+    table = Table(title="Skin-only on the assets' own skeletons; deformation in unit-cube units (random poses | own clips)")
+    for head in ("asset", "category", "method"):
+        table.add_column(head)
+    for head in ("L1", "prec", "recall", "def", "def p95", "clip", "clip p95", "s"):
+        table.add_column(head, justify="right")
+    names = list(dict.fromkeys(r.name for r in report.rows))
+    for name in names:
+        rows = [r for r in report.rows if r.name == name]
+        for i, r in enumerate(rows):
+            first = i == 0
+            label = r.method + (f" → {r.chosen}" if r.chosen else "")
+            cells = ["error"] + [""] * 7 if r.error else _cells(r.metrics)
+            table.add_row(name if first else "", r.category if first else "", label, *cells, end_section=i == len(rows) - 1)
+    for title, subset in (("MEAN (all)", None), ("MEAN (four)", FOUR)):
+        for m in report.methods():
+            table.add_row(title, "", m, *_cells(report.mean(m, subset)), style="bold")
+    console.print(table)
+    for name, reason in report.skipped.items():
+        console.print(f"skipped {name}: {reason}")
+    for r in report.rows:
+        if r.error:
+            console.print(f"[red]{r.name} {r.method}: {r.error}[/red]")
+
+
+def eval_skin(
+    directory: Annotated[Path, typer.Argument(exists=True, file_okay=False, help="folder of rigged .glb/.gltf (MANIFEST.tsv optional)")],
+    method: Annotated[str, typer.Option(help="auto, geodesic, heat or all")] = "auto",
+    peers: Annotated[Path, typer.Option(help="folder of peer weights: PEERS/<peer>/<asset>.npz")] = DEFAULT_PEERS,
+    json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
+) -> None:
+    """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
+    methods = list(OUR_METHODS) if method == "all" else [method]
+    console = Console()
+    with console.status("skinning…") as status:
+        report = evaluate_skinning(directory, methods, peers=peers, on_asset=lambda n: status.update(f"skinning {n}"))
+    render(report, console)
+    if json_path is not None:
+        json_path.parent.mkdir(parents=True, exist_ok=True)
+        json_path.write_text(json.dumps(report.to_dict(), indent=1))
+        console.print(f"wrote {json_path}")
+
+
+if __name__ == "__main__":
+    typer.run(eval_skin)

@@ -1,0 +1,1 @@
+"""Quality evaluations of the pipeline stages over directories of rigged assets."""

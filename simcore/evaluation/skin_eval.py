@@ -1,0 +1,186 @@
+"""Skinning evaluation over a directory of rigged assets (`rigforge eval skin DIR`).
+
+Skin-only: every rigged .glb/.gltf is re-skinned on its own ground-truth skeleton (bind pose, joint order
+and names kept) and compared with the artist's weights: avg L1, support precision/recall, and the
+deformation protocol of `simcore.metrics.skinning` (8 seeded random poses, unit-cube units). A second
+deformation column poses the mesh with the asset's own animation clips where it has them (every clip,
+sampled at CLIP_FPS, at most CLIP_FRAMES frames each). Peer weights (e.g. Blender's, written by
+bench/peers/blender_weights.py as PEERS/<peer>/<asset>.npz) are scored the same way, row by row.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from simcore.errors import InvalidInput, SimcoreError
+from simcore.evaluation.skeleton_eval import read_categories
+from simcore.io.gltf_document import GltfDocument
+from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
+from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
+from simcore.skinning.predict import compute_weights
+
+OUR_METHODS = ("auto", "geodesic", "heat")
+CLIP_FPS = 10.0
+CLIP_FRAMES = 60
+ROW_KEYS = ("l1", "precision", "recall", "deform_mean", "deform_p95", "clip_deform_mean", "clip_deform_p95", "seconds")
+
+
+@dataclass
+class SkinRow:
+    """One asset skinned by one method; metrics None when the method failed (`error` says why)."""
+
+    name: str
+    category: str
+    method: str
+    metrics: dict[str, float | None] = field(default_factory=dict)
+    chosen: str | None = None  # the method `auto` picked
+    error: str | None = None
+
+    def to_dict(self) -> dict:
+        out: dict = {"name": self.name, "category": self.category, "method": self.method}
+        out.update({k: (None if v is None else round(float(v), 6)) for k, v in self.metrics.items()})
+        if self.chosen:
+            out["chosen"] = self.chosen
+        if self.error:
+            out["error"] = self.error
+        return out
+
+
+@dataclass
+class SkinEvaluation:
+    rows: list[SkinRow] = field(default_factory=list)
+    skipped: dict[str, str] = field(default_factory=dict)
+
+    def methods(self) -> list[str]:
+        return list(dict.fromkeys(r.method for r in self.rows))
+
+    def mean(self, method: str, names: set[str] | None = None) -> dict:
+        """Mean of every metric over `method`'s successful rows (optionally only assets in `names`)."""
+        rows = [r for r in self.rows if r.method == method and r.error is None and (names is None or r.name in names)]
+        out: dict = {"assets": len(rows)}
+        for key in ROW_KEYS:
+            vals = [r.metrics[key] for r in rows if r.metrics.get(key) is not None]
+            out[key] = round(float(np.mean(vals)), 6) if vals else None
+        return out
+
+    def to_dict(self) -> dict:
+        """{"assets": [row...], "mean": {method: {...}}, "skipped": {...}} (the issue's JSON format)."""
+        return {
+            "assets": [r.to_dict() for r in self.rows],
+            "mean": {m: self.mean(m) for m in self.methods()},
+            "skipped": self.skipped,
+        }
+
+
+def rigged_assets(directory: Path, skipped: dict[str, str] | None = None) -> Iterator[tuple[str, str, GltfDocument, RiggedAsset]]:
+    """(name, category, document, rigged asset) for each readable skinned .glb/.gltf in `directory`, sorted."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise InvalidInput(f"{directory} is not a directory", code="not_a_directory", field="dir")
+    categories = read_categories(directory)
+    for path in sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf")):
+        try:
+            doc = GltfDocument.from_bytes(path.read_bytes())
+            asset = read_rigged_asset(doc)
+        except SimcoreError as exc:
+            if skipped is not None:
+                skipped[path.stem] = f"{exc.code}: {exc}"
+            continue
+        yield path.stem, categories.get(path.stem, "unknown"), doc, asset
+
+
+def clip_skin_matrices(doc: GltfDocument, asset: RiggedAsset) -> np.ndarray | None:
+    """(T, J, 4, 4) skinning matrices of every clip's frames in the asset's unit-cube frame; None without clips.
+
+    Joint matrix (glTF): world(joint, t) · inverseBindMatrix, taken back into bind space by the inverse of
+    where the rest pose places the bind pose, then conjugated into the unit cube of the bind vertices.
+    """
+    from simcore.motion.gltf_clips import bind_placement, clip_time_range, sample_node_worlds
+
+    anims = doc.items("animations")
+    if not anims:
+        return None
+    placement_inv = np.linalg.inv(bind_placement(doc, asset))
+    ibm = np.linalg.inv(asset.bind_matrices)
+    centre, side = unit_cube_frame(asset.vertices)
+    to_cube = np.diag([1.0 / side] * 3 + [1.0])
+    to_cube[:3, 3] = -centre / side
+    frames = []
+    for index in range(len(anims)):
+        try:
+            t0, t1, _ = clip_time_range(doc, index)
+        except SimcoreError:
+            continue
+        times = np.arange(t0, t1 + 1e-9, 1.0 / CLIP_FPS)[:CLIP_FRAMES]
+        world = sample_node_worlds(doc, index, times, asset.joint_nodes)  # (T, J, 4, 4)
+        frames.append(to_cube @ placement_inv @ world @ ibm @ np.linalg.inv(to_cube))
+    return np.concatenate(frames) if frames else None
+
+
+def score_weights(asset: RiggedAsset, weights: sp.spmatrix | np.ndarray, clips: np.ndarray | None) -> dict[str, float | None]:
+    """Every metric of predicted (V, J) weights against the asset's own."""
+    precision, recall = support_precision_recall(weights, asset.weights)
+    out: dict[str, float | None] = {"l1": weight_l1(weights, asset.weights), "precision": precision, "recall": recall}
+    out.update(deformation_error(asset.vertices, asset.skeleton, weights, asset.weights))
+    if clips is not None:
+        clip = deformation_error(asset.vertices, asset.skeleton, weights, asset.weights, skin_matrices=clips)
+        out["clip_deform_mean"], out["clip_deform_p95"] = clip["deform_mean"], clip["deform_p95"]
+    else:
+        out["clip_deform_mean"] = out["clip_deform_p95"] = None
+    return out
+
+
+def _peer_weights(peers: Path, name: str, shape: tuple[int, int]) -> dict[str, tuple[np.ndarray, float]]:
+    """peer name → (weights (V, J), seconds) from PEERS/<peer>/<name>.npz files that match the asset's shape."""
+    out = {}
+    for folder in sorted(p for p in peers.iterdir() if p.is_dir()):
+        path = folder / f"{name}.npz"
+        if path.is_file():
+            data = np.load(path, allow_pickle=False)
+            if data["weights"].shape == shape:
+                out[folder.name] = (data["weights"].astype(np.float64), float(data["seconds"]))
+    return out
+
+
+def evaluate_skinning(
+    directory: Path,
+    methods: list[str],
+    *,
+    peers: Path | None = None,
+    on_asset: Callable[[str], None] | None = None,
+) -> SkinEvaluation:
+    """Skin every rigged asset in `directory` with each of our `methods`; score peers found under `peers`."""
+    for m in methods:
+        if m not in OUR_METHODS:
+            raise InvalidInput(f"unknown skinning method {m!r}; use {', '.join(OUR_METHODS)} or all", code="invalid_option", field="method")
+    report = SkinEvaluation()
+    for name, category, doc, asset in rigged_assets(directory, report.skipped):
+        if on_asset is not None:
+            on_asset(name)
+        try:
+            clips = clip_skin_matrices(doc, asset)
+        except SimcoreError:
+            clips = None
+        for method in methods:
+            started = time.perf_counter()
+            try:
+                result = compute_weights(asset.vertices, asset.faces, asset.skeleton, method=method)  # type: ignore[arg-type]
+                seconds = time.perf_counter() - started
+                metrics = score_weights(asset, result.weights, clips)
+                metrics["seconds"] = seconds
+                report.rows.append(SkinRow(name, category, method, metrics, chosen=result.method if method == "auto" else None))
+            except Exception as exc:  # one failing asset must not hide the others; the error is reported
+                kind = exc.code if isinstance(exc, SimcoreError) else type(exc).__name__
+                report.rows.append(SkinRow(name, category, method, error=f"{kind}: {exc}"[:200]))
+        if peers is not None and peers.is_dir():
+            for peer, (weights, seconds) in _peer_weights(peers, name, asset.weights.shape).items():
+                metrics = score_weights(asset, weights, clips)
+                metrics["seconds"] = seconds
+                report.rows.append(SkinRow(name, category, peer, metrics))
+    return report

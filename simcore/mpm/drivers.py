@@ -1,0 +1,117 @@
+"""Driving points (PhysRig §3.3): l = 8 points per joint, carried rigidly by the animated skeleton.
+
+Placement modes:
+  "joints": 8 points on the corners of a cube of half-edge `spacing / 2` around each joint.
+  "bones":  8 points spread along the bone cores leaving each joint (split over its child bones, evenly
+            spaced, the joint end first); leaf joints get the "joints" cube. Each point moves with the joint
+            at the bone's parent end.
+Within a frame, joint world transforms are interpolated (slerp rotations, lerp positions) at every substep and
+the velocity imposed over a substep is the displacement over it divided by dt, so the drivers follow the
+animated skeleton exactly at frame times.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from simcore.io.joint_tracks import joint_tracks
+from simcore.motion.types import JointAnimation
+from simcore.skeleton.kinematics import bind_matrices, compose, global_transforms
+from simcore.skeleton.types import Skeleton
+
+PER_JOINT = 8  # the paper's l
+CUBE = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
+
+
+@dataclass
+class DrivingPoints:
+    """rest: (D, 3) float64 bind-pose positions; joints: (D,) int64 joint whose transform carries each point;
+    offsets: (D, 3) float64 position in that joint's bind frame."""
+
+    rest: np.ndarray
+    joints: np.ndarray
+    offsets: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return int(len(self.rest))
+
+
+def place_drivers(skeleton: Skeleton, mode: str, spacing: float) -> DrivingPoints:
+    """PER_JOINT driving points for every joint (see module doc); spacing: grid cell size, metres."""
+    pos, children = skeleton.positions, skeleton.children()
+    points, owners = [], []
+    for j in range(skeleton.num_joints):
+        if mode == "bones" and children[j]:
+            share = np.full(len(children[j]), PER_JOINT // len(children[j]))
+            share[: PER_JOINT - share.sum()] += 1  # 8 in total even with 3, 5, ... children
+            for c, k in zip(children[j], share):
+                if k:
+                    t = np.arange(k)[:, None] / max(k, 1)  # joint end first, child end excluded
+                    points.append(pos[j] + t * (pos[c] - pos[j]))
+                    owners.append(np.full(k, j))
+        else:
+            points.append(pos[j] + CUBE * 0.5 * spacing)
+            owners.append(np.full(PER_JOINT, j))
+    rest = np.concatenate(points)
+    joints = np.concatenate(owners).astype(np.int64)
+    inv_bind = np.linalg.inv(bind_matrices(skeleton))[joints]  # (D, 4, 4)
+    offsets = np.einsum("dab,db->da", inv_bind[:, :3, :3], rest) + inv_bind[:, :3, 3]
+    return DrivingPoints(rest, joints, offsets)
+
+
+def animation_world_transforms(skeleton: Skeleton, animation: JointAnimation) -> np.ndarray:
+    """(T, J, 4, 4) float64 world joint transforms per frame of `animation` (joints matched by name)."""
+    tracks = joint_tracks(skeleton, animation)
+    return global_transforms(skeleton, compose(tracks.rotations, tracks.translations))
+
+
+def _slerp(qa: np.ndarray, qb: np.ndarray, alphas: np.ndarray) -> np.ndarray:
+    """(K, J, 4) quaternions between qa and qb (J, 4) xyzw at fractions alphas (K,), shortest arc."""
+    qb = np.where(np.sum(qa * qb, axis=1, keepdims=True) < 0, -qb, qb)
+    cos = np.clip(np.sum(qa * qb, axis=1), -1.0, 1.0)[None, :, None]
+    theta = np.arccos(cos)
+    a = alphas[:, None, None]
+    sin = np.sin(theta)
+    small = sin < 1e-6  # nearly equal: linear blend is exact to float precision
+    wa = np.where(small, 1.0 - a, np.sin((1.0 - a) * theta) / np.where(small, 1.0, sin))
+    wb = np.where(small, a, np.sin(a * theta) / np.where(small, 1.0, sin))
+    q = wa * qa[None] + wb * qb[None]
+    return q / np.linalg.norm(q, axis=2, keepdims=True)
+
+
+def interpolate_transforms(world_a: np.ndarray, world_b: np.ndarray, alphas: np.ndarray) -> np.ndarray:
+    """(K, J, 4, 4) rigid transforms between world_a and world_b (J, 4, 4) at alphas (K,) in [0, 1]."""
+    qa = Rotation.from_matrix(world_a[:, :3, :3]).as_quat()
+    qb = Rotation.from_matrix(world_b[:, :3, :3]).as_quat()
+    q = _slerp(qa, qb, np.asarray(alphas, dtype=np.float64))
+    k, j = q.shape[:2]
+    out = np.zeros((k, j, 4, 4))
+    out[:, :, :3, :3] = Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(k, j, 3, 3)
+    a = np.asarray(alphas)[:, None, None]
+    out[:, :, :3, 3] = (1.0 - a) * world_a[None, :, :3, 3] + a * world_b[None, :, :3, 3]
+    out[:, :, 3, 3] = 1.0
+    return out
+
+
+def driver_positions(drivers: DrivingPoints, world: np.ndarray) -> np.ndarray:
+    """(K, D, 3) float64 driver positions for joint world transforms (K, J, 4, 4)."""
+    m = world[:, drivers.joints]  # (K, D, 4, 4)
+    return np.einsum("kdab,db->kda", m[:, :, :3, :3], drivers.offsets) + m[:, :, :3, 3]
+
+
+def substep_drive(drivers: DrivingPoints, world_a: np.ndarray, world_b: np.ndarray, substeps: int, dt: float,
+                  ease: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Driver positions and velocities at each substep start of one frame interval.
+
+    Returns (substeps, D, 3) float32 positions and (substeps, D, 3) float32 velocities (m/s), the latter the
+    displacement to the next substep over dt. ease: smoothstep the interpolation (pre-roll from bind pose).
+    """
+    alphas = np.arange(substeps + 1) / substeps
+    if ease:
+        alphas = alphas * alphas * (3.0 - 2.0 * alphas)
+    pos = driver_positions(drivers, interpolate_transforms(world_a, world_b, alphas))
+    return pos[:-1].astype(np.float32), (np.diff(pos, axis=0) / dt).astype(np.float32)

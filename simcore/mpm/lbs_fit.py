@@ -1,0 +1,73 @@
+"""The inverse-skinning baseline: LBS with jointly optimised weights and bone transforms (PhysRig's LBS rows).
+
+M bones pivot at the same centres as the physics fit's virtual joints; weights are a softmax over bones per
+vertex (initialised from distance), each frame has a rotation (axis-angle about the bone centre) and a
+translation per bone (initialised from the neighbourhood displacement, as the physics velocities are).
+Adam on everything with the same squared-chamfer loss; torch on CPU.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+NEIGHBOURS = 16
+
+
+def _rodrigues(r):
+    """(..., 3) axis-angle → (..., 3, 3) rotation matrices (torch)."""
+    import torch
+
+    theta = torch.sqrt((r * r).sum(-1, keepdim=True) + 1e-12)
+    k = r / theta
+    zero = torch.zeros_like(k[..., 0])
+    kx = torch.stack([zero, -k[..., 2], k[..., 1], k[..., 2], zero, -k[..., 0], -k[..., 1], k[..., 0], zero], -1)
+    kx = kx.reshape(*k.shape[:-1], 3, 3)
+    eye = torch.eye(3, dtype=r.dtype).expand_as(kx)
+    s, c = torch.sin(theta)[..., None], torch.cos(theta)[..., None]
+    return eye + s * kx + (1 - c) * (kx @ kx)
+
+
+def _chamfer_sq(a, b):
+    import torch
+
+    d = torch.cdist(a, b) ** 2
+    return d.min(dim=1).values.mean() + d.min(dim=0).values.mean()
+
+
+def fit_lbs(targets: np.ndarray, centres: np.ndarray, steps: int, scale: float, lr: float = 0.01,
+            seed: int = 0) -> np.ndarray:
+    """(T, V, 3) float64 LBS reconstruction of targets (T, V, 3) from its frame 0 with bones at centres (M, 3).
+
+    steps: Adam iterations (the budget); scale: length unit of the loss (the physics fit's dx).
+    """
+    import torch
+
+    torch.manual_seed(seed)
+    tgt = torch.as_tensor(np.asarray(targets, np.float64))
+    rest = tgt[0]
+    c = torch.as_tensor(np.asarray(centres, np.float64))
+    d2 = torch.cdist(rest, c) ** 2
+    spread = float(cKDTree(centres).query(centres, k=2)[0][:, 1].mean()) if len(centres) > 1 else 1.0
+    logits = (-d2 / (2 * spread**2)).clone().requires_grad_(True)
+    _, near = cKDTree(np.asarray(targets[0])).query(centres, k=min(NEIGHBOURS, targets.shape[1]))
+    shift = (np.asarray(targets)[1:, near] - np.asarray(targets)[0, near][None]).mean(axis=2)  # (T-1, M, 3)
+    trans = torch.as_tensor(shift).clone().requires_grad_(True)
+    rot = torch.zeros_like(trans).requires_grad_(True)
+    opt = torch.optim.Adam([logits, trans, rot], lr=lr)
+
+    def pose():
+        w = torch.softmax(logits, dim=1)  # (V, M)
+        R = _rodrigues(rot)  # (T-1, M, 3, 3)
+        local = rest[None, :, None, :] - c[None, None]  # (1, V, M, 3)
+        moved = torch.einsum("tmab,tvmb->tvma", R, local.expand(len(R), -1, -1, -1)) + c[None, None] + trans[:, None]
+        return torch.einsum("vm,tvma->tva", w, moved)
+
+    for _ in range(steps):
+        opt.zero_grad()
+        frames = pose()
+        loss = sum(_chamfer_sq(frames[f], tgt[f + 1]) for f in range(len(frames))) / scale**2
+        loss.backward()
+        opt.step()
+    with torch.no_grad():
+        return torch.cat([rest[None], pose()]).numpy()

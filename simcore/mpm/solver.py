@@ -1,0 +1,199 @@
+"""MLS-MPM substeps on a (sparse) background grid, forward and adjoint.
+
+The adjoint never keeps a grid per substep: `backward_substep` recomputes one substep's grid from the stored
+particle state under a short `wp.Tape`, pulls the particle adjoints back through it and clears the grid. So a
+differentiable frame stores only particle states (x, v, C, F: 24 floats per particle per substep).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+from simcore.mpm import kernels as K
+
+
+@dataclass
+class ParticleState:
+    """Particle arrays on one device: x, v (N,) vec3; C (APIC affine velocity), F (deformation gradient) (N,) mat33."""
+
+    x: wp.array
+    v: wp.array
+    C: wp.array
+    F: wp.array
+
+    def arrays(self) -> tuple[wp.array, ...]:
+        return (self.x, self.v, self.C, self.F)
+
+    def assign(self, other: "ParticleState") -> None:
+        """Copy values (not gradients) from another state."""
+        for dst, src in zip(self.arrays(), other.arrays()):
+            wp.copy(dst, src)
+
+    def zero_grad(self) -> None:
+        for a in self.arrays():
+            if a.grad is not None:
+                a.grad.zero_()
+
+
+@dataclass
+class SubstepInputs:
+    """What one substep needs besides the particle state.
+
+    mu, lam: (N,) float per-particle Lamé parameters (Pa); origin: world position of grid node (0, 0, 0), metres;
+    dt: seconds; dp, dv: (D,) vec3 driving-point positions and velocities (None: no drivers).
+    """
+
+    mu: wp.array
+    lam: wp.array
+    origin: tuple[float, float, float]
+    dt: float
+    dp: wp.array | None = None
+    dv: wp.array | None = None
+
+
+def warp_device(device: str | None = None) -> str:
+    """Initialise Warp quietly and return the device name ("cpu", "cuda:0"); default: CUDA when present."""
+    wp.config.quiet = True
+    wp.init()
+    if device:
+        return device
+    return "cuda:0" if wp.is_cuda_available() else "cpu"
+
+
+class MPMSolver:
+    """Fixed-size particle set on an n³ grid of spacing dx (the grid may move: `origin` is per substep).
+
+    particle_mass: kg per particle; particle_volume: m³ per particle; sparse: update only active 4³ blocks
+    (False runs the dense reference of the same kernels); gravity: m/s²; drive_gain: how strongly driver
+    weight on a node replaces its velocity (weight × gain, capped at 1); bound: wall band in nodes;
+    v_max: velocity clamp in m/s (None: 0.5 dx/dt per substep, the CFL limit).
+    """
+
+    def __init__(
+        self,
+        num_particles: int,
+        grid: int,
+        dx: float,
+        particle_mass: float,
+        particle_volume: float,
+        *,
+        device: str | None = None,
+        sparse: bool = True,
+        gravity: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        drive_gain: float = 4.0,
+        bound: int = 3,
+        requires_grad: bool = False,
+    ) -> None:
+        if grid % K.BLOCK:
+            raise ValueError(f"grid must be a multiple of {K.BLOCK}, got {grid}")
+        self.device = warp_device(device)
+        self.n, self.dx, self.num_particles = int(grid), float(dx), int(num_particles)
+        self.mass, self.vol = float(particle_mass), float(particle_volume)
+        self.sparse, self.gravity, self.drive_gain, self.bound = sparse, wp.vec3(*gravity), float(drive_gain), int(bound)
+        self.requires_grad = requires_grad
+        nodes, nb = self.n**3, (self.n // K.BLOCK) ** 3
+        g = dict(device=self.device, requires_grad=requires_grad)
+        self.grid_mv = wp.zeros(nodes, dtype=wp.vec3, **g)
+        self.grid_m = wp.zeros(nodes, dtype=float, **g)
+        self.drv_v = wp.zeros(nodes, dtype=wp.vec3, **g)
+        self.drv_w = wp.zeros(nodes, dtype=float, **g)
+        self.grid_v = wp.zeros(nodes, dtype=wp.vec3, **g)
+        self.flags = wp.zeros(nb, dtype=wp.int32, device=self.device)
+        self.active = wp.zeros(nb, dtype=wp.int32, device=self.device)
+        self.count = wp.zeros(1, dtype=wp.int32, device=self.device)
+        self.clamps = wp.zeros(2, dtype=wp.int32, device=self.device)  # [velocity clamps, det F rejections]
+        self.active_blocks = 0
+
+    # --- state -----------------------------------------------------------------------------------------
+
+    def new_state(self, x: np.ndarray | None = None, requires_grad: bool = False) -> ParticleState:
+        """A state at rest (v = 0, C = 0, F = I) at positions x: (N, 3) float (zeros when None)."""
+        n, d = self.num_particles, self.device
+        xs = np.zeros((n, 3), np.float32) if x is None else np.asarray(x, np.float32)
+        F = np.tile(np.eye(3, dtype=np.float32), (n, 1, 1))
+        return ParticleState(
+            wp.array(xs, dtype=wp.vec3, device=d, requires_grad=requires_grad),
+            wp.zeros(n, dtype=wp.vec3, device=d, requires_grad=requires_grad),
+            wp.zeros(n, dtype=wp.mat33, device=d, requires_grad=requires_grad),
+            wp.array(F, dtype=wp.mat33, device=d, requires_grad=requires_grad),
+        )
+
+    # --- one substep -----------------------------------------------------------------------------------
+
+    def _prepare_blocks(self, s: ParticleState, inp: SubstepInputs) -> None:
+        if not self.sparse:
+            return
+        origin, inv_dx = wp.vec3(*inp.origin), 1.0 / self.dx
+        wp.launch(K.mark_blocks, dim=self.num_particles, inputs=[s.x, origin, inv_dx, self.n, self.flags], device=self.device)
+        if inp.dp is not None and inp.dp.shape[0]:
+            wp.launch(K.mark_blocks, dim=inp.dp.shape[0], inputs=[inp.dp, origin, inv_dx, self.n, self.flags], device=self.device)
+        self.count.zero_()
+        wp.launch(K.compact_blocks, dim=self.flags.shape[0], inputs=[self.flags, self.active, self.count], device=self.device)
+        self.active_blocks = int(self.count.numpy()[0])  # host read: the launch size of the grid passes
+
+    def _transfer(self, s_in: ParticleState, s_out: ParticleState, inp: SubstepInputs) -> None:
+        origin, dev, n = wp.vec3(*inp.origin), self.device, self.n
+        wp.launch(K.p2g, dim=self.num_particles, device=dev, inputs=[
+            s_in.x, s_in.v, s_in.C, s_in.F, inp.mu, inp.lam, self.mass, self.vol, origin, self.dx, inp.dt, n,
+            self.grid_mv, self.grid_m])
+        if inp.dp is not None and inp.dp.shape[0]:
+            wp.launch(K.drivers_to_grid, dim=inp.dp.shape[0], device=dev,
+                      inputs=[inp.dp, inp.dv, origin, self.dx, n, self.drv_v, self.drv_w])
+        common = [self.grid_mv, self.grid_m, self.drv_v, self.drv_w, self.gravity, inp.dt, self.drive_gain, self.bound, self.grid_v]
+        if self.sparse:
+            wp.launch(K.grid_update_sparse, dim=self.active_blocks * K.BLOCK**3, inputs=[self.active, n, *common], device=dev)
+        else:
+            wp.launch(K.grid_update_dense, dim=n**3, inputs=[n, *common], device=dev)
+        v_max = 0.5 * self.dx / inp.dt
+        wp.launch(K.g2p, dim=self.num_particles, device=dev, inputs=[
+            s_in.x, s_in.F, self.grid_v, origin, self.dx, inp.dt, n, v_max,
+            s_out.x, s_out.v, s_out.C, s_out.F, self.clamps])
+
+    def _clear(self, with_grads: bool) -> None:
+        arrays = [self.grid_mv, self.grid_m, self.drv_v, self.drv_w, self.grid_v]
+        sets = [arrays] + ([[a.grad for a in arrays]] if with_grads else [])
+        if not self.sparse:
+            for group in sets:
+                for a in group:
+                    a.zero_()
+            return
+        dim = self.active_blocks * K.BLOCK**3
+        for group in sets:
+            wp.launch(K.clear_blocks, dim=dim, inputs=[self.active, self.n, *group], device=self.device)
+        wp.launch(K.clear_flags, dim=self.active_blocks, inputs=[self.active, self.flags], device=self.device)
+
+    def substep(self, s_in: ParticleState, s_out: ParticleState, inp: SubstepInputs) -> None:
+        """Advance s_in by inp.dt into s_out (they must be different states)."""
+        self._prepare_blocks(s_in, inp)
+        self._transfer(s_in, s_out, inp)
+        self._clear(with_grads=False)
+
+    def backward_substep(self, s_in: ParticleState, s_out: ParticleState, inp: SubstepInputs) -> None:
+        """Accumulate s_in.grad (and mu/lam/dv grads) from s_out.grad, recomputing the grid of this substep.
+
+        s_in holds the stored values of the substep's start; s_out's values are overwritten by the recompute,
+        its grads are read. s_in.grad must be zeroed by the caller.
+        """
+        self._prepare_blocks(s_in, inp)
+        tape = wp.Tape()
+        with tape:
+            self._transfer(s_in, s_out, inp)
+        tape.backward()
+        self._clear(with_grads=True)
+
+    # --- diagnostics -----------------------------------------------------------------------------------
+
+    def take_clamp_counts(self) -> tuple[int, int]:
+        """(velocity clamps, det F rejections) since the last call."""
+        c = self.clamps.numpy()
+        self.clamps.zero_()
+        return int(c[0]), int(c[1])
+
+    def mean_det_deviation(self, s: ParticleState) -> float:
+        """Mean over particles of |det F - 1|."""
+        out = wp.zeros(1, dtype=float, device=self.device)
+        wp.launch(K.det_deviation, dim=self.num_particles, inputs=[s.F, out], device=self.device)
+        return float(out.numpy()[0]) / max(self.num_particles, 1)

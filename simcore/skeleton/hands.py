@@ -1,0 +1,93 @@
+"""Finger joints for a fitted humanoid: re-voxelise each hand finely and read the fingers off its medial tree.
+
+A hand is cropped around the fitted wrist (vertices of faces inside a sphere over the hand), voxelised at a
+resolution where fingers separate, thinned and pruned. Tips beyond the wrist are finger candidates; the
+thumb is the one that branches off closest to the wrist, the other four are ordered index → pinky by how far
+forward they are (palms down or in, the index is the front finger). Joints 1, 2, 3 sit along each finger's
+branch (knuckle, then fractions of the knuckle → tip length measured on Mixamo hands).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from simcore.geometry.voxelize import solid_voxels
+from simcore.skeleton.geometric import rank_bodies
+from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
+from simcore.skeleton.medial import medial_forest
+from simcore.skeleton.mixamo import FINGERS
+
+HAND_RESOLUTION = 64
+MIN_FINGER_RATIO = 0.35  # shortest / longest free finger branch (the thumb's is the shortest on real hands)
+PHALANX = {"Thumb": (0.15, 0.5, 0.8), "Other": (0.0, 0.42, 0.72)}  # fraction of knuckle-branch → tip arc
+
+
+def _one_hand(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray, elbow: np.ndarray,
+              forward: np.ndarray) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
+    forearm = float(np.linalg.norm(wrist - elbow))
+    d = (wrist - elbow) / max(forearm, 1e-12)
+    centre, radius = wrist + 0.35 * forearm * d, 0.75 * forearm
+    near = np.linalg.norm(vertices - centre, axis=1) < radius
+    keep = near[faces].all(axis=1)
+    if keep.sum() < 20:
+        return None, {"reason": "too few triangles around the hand"}
+    used = np.unique(faces[keep])
+    remap = -np.ones(len(vertices), np.int64)
+    remap[used] = np.arange(len(used))
+    sub_v, sub_f = vertices[used], remap[faces[keep]]
+    grid = solid_voxels(sub_v, sub_f, resolution=HAND_RESOLUTION)
+    forest = medial_forest(grid)
+    ranked, _, _ = rank_bodies(grid, forest)
+    scale = float(np.ptp(sub_v, axis=0).max())
+    removed = set(prune_spurs(forest.adjacency, forest.positions, forest.radius, 1.5, 0.03 * scale))
+    nodes = [int(n) for n in np.flatnonzero(forest.component == ranked[0]) if n not in removed]
+    pos = forest.positions
+    leaves = [n for n in nodes if len(forest.adjacency[n]) == 1]
+    if not leaves:
+        return None, {"reason": "no medial tree in the hand crop"}
+    along = {n: float((pos[n] - wrist) @ d) for n in nodes}
+    root = min(leaves, key=lambda n: (along[n], n))  # the cut forearm end
+    parent = rooted_parents(forest.adjacency, root)
+    tips = [n for n in leaves if n != root and along[n] > 0.15 * forearm]
+    if len(tips) < 5:
+        return None, {"reason": f"fingers not separable ({len(tips)} finger tips found)", "tips": len(tips)}
+    chains = {}
+    for tip in tips:
+        path = [tip]
+        while parent[path[-1]] >= 0 and len(forest.adjacency[path[-1]]) <= 2 or len(path) == 1:
+            path.append(parent[path[-1]])
+        chains[tip] = path  # tip → its branch point
+    tips = sorted(tips, key=lambda n: (-path_length(pos, chains[n]), n))[:5]
+    lengths = [path_length(pos, chains[n]) for n in tips]
+    if min(lengths) < MIN_FINGER_RATIO * max(lengths) or max(lengths) < 0.2 * forearm:
+        return None, {"reason": "finger-like tips are too unequal or too short to be fingers", "tips": len(tips)}
+    thumb = min(tips, key=lambda n: (along[chains[n][-1]], n))
+    others = sorted((n for n in tips if n != thumb), key=lambda n: (-float(pos[n] @ forward), n))
+    out: dict[str, np.ndarray] = {}
+    for finger, tip in zip(FINGERS, [thumb] + others):
+        pts = pos[chains[tip][::-1]]  # branch point → tip
+        for k, frac in enumerate(PHALANX["Thumb" if finger == "Thumb" else "Other"], start=1):
+            out[f"{finger}{k}"] = point_at_fraction(pts, frac)
+    return out, {"tips": len(leaves) - 1}
+
+
+def fit_fingers(vertices: np.ndarray, faces: np.ndarray, body: dict[str, np.ndarray], up: np.ndarray,
+                forward: np.ndarray, left: np.ndarray) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
+    """The 30 finger joints (bare Mixamo names → (3,) positions) when both hands show five fingers, else None.
+
+    body: bare Mixamo body joint name → (3,) position (needs LeftHand/LeftForeArm and the Right pair).
+    """
+    out: dict[str, np.ndarray] = {}
+    report: dict[str, Any] = {}
+    for side in ("Left", "Right"):
+        fingers, info = _one_hand(np.asarray(vertices, np.float64), np.asarray(faces, np.int64),
+                                  body[f"{side}Hand"], body[f"{side}ForeArm"], forward)
+        report[side.lower()] = info
+        if fingers is None:
+            report["separable"] = False
+            return None, report
+        out.update({f"{side}Hand{k}": p for k, p in fingers.items()})
+    report["separable"] = True
+    return out, report

@@ -1,0 +1,376 @@
+"""Mixamo humanoid fit: detect an upright biped on the medial tree and place the 22 body joints (+30 fingers).
+
+Detection works on the largest body's pruned medial tree (see `geometric`), for each candidate up axis:
+head = highest tree tip; feet = the two low tips whose tree paths split highest (the crotch); arms = the two
+tips hanging off the head-to-crotch spine above the crotch, on opposite sides. Each check gives a soft score;
+their product is the confidence. Facing comes from the toes (feet point forward), and the character's left
+is up × forward (Mixamo: facing +Z with +Y up puts the left hand at +X).
+
+Joint placement follows the medial paths, with proportions measured on Mixamo characters (fractions along
+the spine between Hips and Neck, along the arm from shoulder to fingertip, knee halfway between hip and
+ankle, ankle at the foot's corner). Joints that land outside the solid are moved to the nearest inside voxel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from simcore.errors import InvalidInput
+from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.skeleton.geometric import rank_bodies
+from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
+from simcore.skeleton.hands import fit_fingers
+from simcore.skeleton.medial import medial_forest
+from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
+from simcore.skeleton.types import JointKind, Skeleton
+
+AXES: dict[str, np.ndarray] = {
+    "x": np.array([1.0, 0, 0]), "-x": np.array([-1.0, 0, 0]), "y": np.array([0, 1.0, 0]),
+    "-y": np.array([0, -1.0, 0]), "z": np.array([0, 0, 1.0]), "-z": np.array([0, 0, -1.0]),
+}
+UP_ORDER = ("y", "z", "-y", "-z", "x", "-x")  # glTF's +Y first: it wins ties
+CONFIDENT = 0.5
+RESOLUTION = 112
+SPINE_FRACTIONS = {"Spine": 0.21, "Spine1": 0.435, "Spine2": 0.67}  # of Hips → Neck, Mixamo characters
+ARM_FRACTIONS = {"ForeArm": 0.35, "Hand": 0.71}  # of shoulder joint → fingertip
+SHOULDER_REACH = 2.0  # shoulder joint: this many chest radii out along the arm from the spine
+HIPS_ABOVE_CROTCH = 0.01  # × height: Hips sits just above where the leg branches meet
+FUSED_CROTCH = 0.4  # a leg split below this share of the height means the thighs are fused in the voxels
+TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (0.575 on Mixamo's Xbot and Soldier)
+
+
+@dataclass
+class HumanoidFit:
+    """skeleton: the fitted Mixamo skeleton, or None when no biped was found (report says why)."""
+
+    skeleton: Skeleton | None
+    report: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class _Tree:
+    pos: np.ndarray  # (N, 3) medial node positions
+    radius: np.ndarray  # (N,)
+    adjacency: list[list[int]]
+    nodes: np.ndarray  # ids of the main body's tree
+
+
+@dataclass
+class _Biped:
+    up: np.ndarray
+    confidence: float
+    checks: dict[str, float]
+    floor: float
+    height: float
+    parent: dict[int, int]  # tree rooted at the head tip
+    head: int
+    feet: tuple[int, int]
+    pelvis: int
+    hands: tuple[int, int]
+    attach: tuple[int, int]
+
+
+def _axis(name: str | None, option: str) -> np.ndarray | None:
+    if name is None:
+        return None
+    if name not in AXES:
+        raise InvalidInput(f"unknown axis {name!r}; use one of {', '.join(AXES)}", code="invalid_option",
+                           field=f"options.{option}")
+    return AXES[name]
+
+
+def _up_path(parent: dict[int, int], n: int, stop: int = -1) -> list[int]:
+    """Nodes from n towards the root, through `stop` when met."""
+    out = [n]
+    while parent[out[-1]] >= 0 and out[-1] != stop:
+        out.append(parent[out[-1]])
+    return out
+
+
+def _soft(value: float, lo: float, hi: float, slack: float) -> float:
+    """1 inside [lo, hi], falling linearly to 0 at `slack` outside."""
+    if value < lo:
+        return max(0.0, 1.0 - (lo - value) / slack)
+    if value > hi:
+        return max(0.0, 1.0 - (value - hi) / slack)
+    return 1.0
+
+
+def _detect(tree: _Tree, up: np.ndarray, vertices: np.ndarray) -> _Biped | None:
+    heights = vertices @ up
+    floor, height = float(heights.min()), float(np.ptp(heights))
+    if height <= 0:  # a flat mesh has no extent along this axis
+        return None
+    rel = (tree.pos @ up - floor) / height
+    leaves = [int(n) for n in tree.nodes if len(tree.adjacency[n]) == 1]
+    if len(leaves) < 4:
+        return None
+    # The highest medial node ends the spine even when a short head was pruned as a spur.
+    head = int(max(tree.nodes, key=lambda n: (rel[n], -n)))
+    parent = rooted_parents(tree.adjacency, head)
+    leaves = sorted(set(leaves) | {head})
+    depth_path = {n: _up_path(parent, n) for n in leaves}
+    low = [n for n in leaves if rel[n] < 0.2 and n != head]
+    best = None
+    for i, a in enumerate(low):
+        sa = set(depth_path[a])
+        for b in low[i + 1:]:
+            lca = next(m for m in depth_path[b] if m in sa)
+            if best is None or rel[lca] > rel[best[2]]:
+                best = (a, b, lca)
+    if best is None:
+        return None
+    foot_a, foot_b, pelvis = best
+    spine = _up_path(parent, pelvis)
+    spine_set = set(spine)
+    legs = set(depth_path[foot_a]) | set(depth_path[foot_b])
+    arms = []
+    extra_low = 0
+    for n in leaves:
+        if n in (head, foot_a, foot_b):
+            continue
+        path = _up_path(parent, n)
+        attach = next(m for m in path if m in spine_set or m in legs)
+        if attach not in spine_set or attach == pelvis:
+            continue  # hangs off a leg: a heel or toe spur
+        if rel[n] < 0.15:
+            extra_low += 1
+        length = path_length(tree.pos, path[: path.index(attach) + 1])
+        if rel[attach] > rel[pelvis] and length > 0.12 * height:
+            arms.append((n, attach, length))
+    pair = None
+    for i, (a, pa, la) in enumerate(arms):
+        for b, pb, lb in arms[i + 1:]:
+            side = tree.pos[a] - tree.pos[b]
+            span = float(np.linalg.norm(side - (side @ up) * up))
+            if pair is None or span > pair[0]:
+                pair = (span, (a, b), (pa, pb), (la, lb))
+    if pair is None:
+        return None
+    span, hands, attach, arm_len = pair
+    leg_len = (path_length(tree.pos, depth_path[foot_a][: depth_path[foot_a].index(pelvis) + 1]),
+               path_length(tree.pos, depth_path[foot_b][: depth_path[foot_b].index(pelvis) + 1]))
+    checks = {
+        "head_on_top": _soft(rel[head], 0.9, 1.01, 0.1),
+        "crotch_height": _soft(rel[pelvis], 0.25, 0.62, 0.1),
+        "arms_above_crotch": _soft(min(rel[attach[0]], rel[attach[1]]) - rel[pelvis], 0.15, 1.0, 0.1),
+        "arm_symmetry": _soft(min(arm_len) / max(arm_len), 0.7, 1.0, 0.2),
+        "leg_symmetry": _soft(min(leg_len) / max(leg_len), 0.75, 1.0, 0.2),
+        "hand_span": _soft(span / height, 0.3, 2.0, 0.15),
+        "hands_off_floor": _soft(min(rel[hands[0]], rel[hands[1]]), 0.3, 1.0, 0.15),
+        "two_feet_only": 1.0 if extra_low == 0 else 0.3,
+    }
+    confidence = float(np.prod(list(checks.values())))
+    return _Biped(up, confidence, checks, floor, height, parent, head, (foot_a, foot_b), pelvis, hands, attach)
+
+
+def _polyline(tree: _Tree, path: list[int]) -> np.ndarray:
+    return tree.pos[path]
+
+
+def _to_tip(tree: _Tree, path: list[int]) -> np.ndarray:
+    """Polyline of `path` (ending at a tip node) extended by the tip's radius: thinning stops that far short."""
+    pts = tree.pos[path]
+    back = pts[max(len(pts) - 4, 0)]
+    d = pts[-1] - back
+    norm = float(np.linalg.norm(d))
+    if norm < 1e-12:
+        return pts
+    return np.vstack([pts, pts[-1] + d / norm * float(tree.radius[path[-1]])])
+
+
+def _at_height(points: np.ndarray, up: np.ndarray, target: float) -> np.ndarray:
+    """First point along the polyline whose height reaches `target` (clamped to the nearer end)."""
+    h = points @ up
+    for i in range(len(points) - 1):
+        lo, hi = sorted((h[i], h[i + 1]))
+        if lo <= target <= hi and hi > lo:
+            w = (target - h[i]) / (h[i + 1] - h[i])
+            return points[i] + w * (points[i + 1] - points[i])
+    return points[int(np.argmin(np.abs(h - target)))].copy()
+
+
+def _corner(points: np.ndarray) -> int:
+    """Index of the polyline point farthest from the chord between its ends (the ankle on knee → toe)."""
+    a, b = points[0], points[-1]
+    d = b - a
+    rel = points - a
+    t = np.clip(rel @ d / max(float(d @ d), 1e-12), 0, 1)
+    return int(np.argmax(np.linalg.norm(rel - t[:, None] * d, axis=1)))
+
+
+def _facing(tree: _Tree, biped: _Biped, leg_paths: list[list[int]], lateral: np.ndarray,
+            forward: np.ndarray | None) -> tuple[np.ndarray, float]:
+    """Forward unit vector ⊥ up and how sure we are (0..1): the toes point forward."""
+    up = biped.up
+    side_normal = np.cross(up, lateral)
+    side_normal /= np.linalg.norm(side_normal)
+    if forward is not None:
+        f = forward - (forward @ up) * up
+        if np.linalg.norm(f) < 1e-6:
+            raise InvalidInput("forward_axis is parallel to the up axis", code="invalid_option", field="options.forward_axis")
+        return f / np.linalg.norm(f), 1.0
+    votes = []
+    for path in leg_paths:
+        pts = _polyline(tree, path)
+        ankle = pts[_corner(pts)]  # path runs toe tip → crotch; its corner is the ankle
+        votes.append(float((pts[0] - ankle) @ side_normal))
+    total = sum(votes)
+    reach = sum(abs(x) for x in votes) or 1.0
+    return (side_normal if total >= 0 else -side_normal), abs(total) / reach
+
+
+def _snap_inside(grid: VoxelGrid, points: np.ndarray) -> np.ndarray:
+    """Move points outside the solid to the centre of the nearest occupied voxel."""
+    out = points.copy()
+    outside = ~grid.inside(points)
+    if outside.any():
+        _, idx = ndimage.distance_transform_edt(~grid.occupancy, return_indices=True)
+        ijk = np.clip(grid.index_of(points[outside]), 0, np.asarray(grid.occupancy.shape) - 1)
+        nearest = idx[:, ijk[:, 0], ijk[:, 1], ijk[:, 2]].T
+        out[outside] = grid.centers(nearest)
+    return out
+
+
+def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarray) -> dict[str, np.ndarray]:
+    up, floor, height = biped.up, biped.floor, biped.height
+    j: dict[str, np.ndarray] = {}
+    spine = _polyline(tree, _up_path(biped.parent, biped.pelvis)[::-1])[::-1]  # pelvis → head tip
+    pelvis_h = float(tree.pos[biped.pelvis] @ up)
+    sides = {}
+    for hand, attach in zip(biped.hands, biped.attach):
+        side = "Left" if (tree.pos[hand] - tree.pos[attach]) @ left > 0 else "Right"
+        sides[side] = (hand, attach)
+    if len(sides) != 2:
+        raise _NotBiped("both hands are on one side")
+    arm_h = []
+    for side, (hand, attach) in sides.items():
+        path = _up_path(biped.parent, hand, stop=attach)[::-1]  # attach → fingertip
+        pts = _to_tip(tree, path)
+        reach = max(SHOULDER_REACH * float(tree.radius[attach]), 0.05 * height)
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        shoulder_at = float(np.clip(reach / max(arc[-1], 1e-9), 0.05, 0.4))
+        arm = point_at_fraction(pts, shoulder_at)
+        rest = pts[np.searchsorted(arc, shoulder_at * arc[-1]):]
+        rest = np.vstack([arm, rest]) if len(rest) else np.vstack([arm, pts[-1]])
+        j[f"{side}Arm"] = arm
+        for name, frac in ARM_FRACTIONS.items():
+            j[f"{side}{name}"] = point_at_fraction(rest, frac)
+        j[f"{side}Shoulder"] = pts[0] + 0.35 * (arm - pts[0]) + 0.01 * height * up
+        arm_h.append(float(arm @ up))
+    shoulder_h = float(np.mean(arm_h))
+    top = floor + height
+    hips_h = pelvis_h + HIPS_ABOVE_CROTCH * height
+    if pelvis_h - floor < FUSED_CROTCH * height:  # thighs touch in the solid: the medial split is near the knees
+        hips_h = floor + TYPICAL_HIPS * height
+    j["Hips"] = _at_height(spine, up, hips_h)
+    j["Neck"] = _at_height(spine, up, shoulder_h + 0.2 * (top - shoulder_h))
+    j["Head"] = _at_height(spine, up, shoulder_h + 0.45 * (top - shoulder_h))
+    hips_up, neck_up = float(j["Hips"] @ up), float(j["Neck"] @ up)
+    for name, frac in SPINE_FRACTIONS.items():
+        j[name] = _at_height(spine, up, hips_up + frac * (neck_up - hips_up))
+    for foot in biped.feet:
+        path = _up_path(biped.parent, foot, stop=biped.pelvis)[::-1]  # pelvis → toe tip
+        pts = _to_tip(tree, path)
+        side = "Left" if (pts[-1] - spine[0]) @ left > 0 else "Right"
+        up_leg_h = hips_up - 0.035 * height
+        below = _at_height(pts, up, pelvis_h - 0.05 * height)
+        up_leg = below + (up_leg_h - float(below @ up)) * up
+        j[f"{side}UpLeg"] = up_leg
+        lower = pts[int(np.argmin(np.abs(pts @ up - (pelvis_h - 0.05 * height)))):]
+        ankle_i = _corner(lower)
+        ankle = lower[ankle_i]
+        j[f"{side}Foot"] = ankle
+        knee_h = 0.5 * (up_leg_h + float(ankle @ up))
+        if float(lower[0] @ up) >= knee_h:
+            j[f"{side}Leg"] = _at_height(lower[: ankle_i + 1], up, knee_h)
+        else:  # the leg's own medial line starts below the knee (fused thighs): straight thigh-shin line
+            j[f"{side}Leg"] = 0.5 * (up_leg + ankle)
+        j[f"{side}ToeBase"] = point_at_fraction(lower[ankle_i:], 0.6)
+    missing = [n for n in BODY_JOINTS if n not in j]
+    if missing:
+        raise _NotBiped(f"could not place {missing}")
+    return j
+
+
+class _NotBiped(Exception):
+    """Internal: the tree looked like a biped but a limb could not be laid out."""
+
+
+def _main_tree(vertices: np.ndarray, faces: np.ndarray) -> tuple[VoxelGrid, _Tree]:
+    grid = solid_voxels(vertices, faces, resolution=RESOLUTION)
+    forest = medial_forest(grid)
+    ranked, _, _ = rank_bodies(grid, forest)
+    scale = float(np.ptp(vertices, axis=0).max())
+    removed = prune_spurs(forest.adjacency, forest.positions, forest.radius, 1.2, 0.02 * scale)
+    alive = np.ones(len(forest.positions), bool)
+    alive[removed] = False
+    nodes = np.flatnonzero((forest.component == ranked[0]) & alive)
+    return grid, _Tree(forest.positions, forest.radius, forest.adjacency, nodes)
+
+
+def _facing_label(forward: np.ndarray) -> str:
+    name = max(AXES, key=lambda k: float(AXES[k] @ forward))
+    return name if name.startswith("-") else "+" + name
+
+
+def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, up_axis: str | None = None,
+                 forward_axis: str | None = None, force: bool = False) -> HumanoidFit:
+    """Fit the Mixamo skeleton when the mesh is an upright biped.
+
+    vertices: (V, 3) float64, faces: (F, 3) int64, any frame (up detected unless `up_axis` is given).
+    force: accept a biped below the confidence threshold (options.skeleton = "humanoid"); a mesh with no biped
+    layout at all still returns skeleton None. Report: detected, confidence, checks, up, facing, fingers.
+    """
+    up_given, forward_given = _axis(up_axis, "up_axis"), _axis(forward_axis, "forward_axis")
+    report: dict[str, Any] = {"detected": False}
+    if max_joints < len(BODY_JOINTS):
+        report["reason"] = f"max_joints {max_joints} is below the {len(BODY_JOINTS)} Mixamo body joints"
+        return HumanoidFit(None, report)
+    v = np.asarray(vertices, dtype=np.float64)
+    grid, tree = _main_tree(v, faces)
+    candidates = [up_given] if up_given is not None else [AXES[a] for a in UP_ORDER]
+    found = [b for b in (_detect(tree, up, v) for up in candidates) if b is not None]
+    if not found:
+        report.update(confidence=0.0, reason="no head, two feet and two arms on the medial tree")
+        return HumanoidFit(None, report)
+    biped = max(found, key=lambda b: b.confidence)  # max keeps the first (glTF +Y) on ties
+    report.update(confidence=round(biped.confidence, 3), checks={k: round(x, 3) for k, x in biped.checks.items()},
+                  up=_facing_label(biped.up))
+    if biped.confidence < CONFIDENT and not force:
+        report["reason"] = "biped detection below the confidence threshold"
+        return HumanoidFit(None, report)
+    lateral = tree.pos[biped.hands[0]] - tree.pos[biped.hands[1]]
+    lateral -= (lateral @ biped.up) * biped.up
+    lateral /= max(np.linalg.norm(lateral), 1e-12)
+    leg_paths = [_up_path(biped.parent, f, stop=biped.pelvis) for f in biped.feet]
+    forward, facing_conf = _facing(tree, biped, leg_paths, lateral, forward_given)
+    left = np.cross(biped.up, forward)
+    try:
+        joints = _place_body(tree, biped, left, forward)
+    except _NotBiped as exc:
+        report["reason"] = str(exc)
+        return HumanoidFit(None, report)
+    names = list(BODY_JOINTS)
+    positions = [joints[n] for n in names]
+    kinds = [JointKind.BODY] * len(names)
+    parents = [names.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in names]
+    fingers: dict[str, np.ndarray] | None = None
+    if max_joints >= len(BODY_JOINTS) + len(HAND_JOINTS):
+        fingers, finger_report = fit_fingers(v, faces, joints, biped.up, forward, left)
+        report["fingers"] = finger_report
+    if fingers is not None:
+        for n in HAND_JOINTS:
+            names.append(n)
+            positions.append(fingers[n])
+            kinds.append(JointKind.HAND)
+            parents.append(names.index(HAND_PARENTS[n]))
+    pos = _snap_inside(grid, np.asarray(positions))
+    skeleton = Skeleton(pos, np.asarray(parents), [full_name(n) for n in names], kinds).validate()
+    report.update(detected=True, facing=_facing_label(forward), facing_vector=np.round(forward, 4).tolist(),
+                  facing_confidence=round(facing_conf, 3), joints=skeleton.num_joints)
+    return HumanoidFit(skeleton, report)

@@ -1,0 +1,78 @@
+"""One entry point for skeleton prediction: geometric, humanoid template, or automatic choice."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from simcore.errors import InvalidInput
+from simcore.skeleton.geometric import geometric_skeleton
+from simcore.skeleton.types import Skeleton
+
+Method = Literal["auto", "geometric", "humanoid"]
+METHODS: tuple[str, ...] = ("auto", "geometric", "humanoid")
+
+
+@dataclass
+class SkeletonPrediction:
+    """A predicted skeleton (in the input vertices' frame), the method that made it, and a JSON-ready report."""
+
+    skeleton: Skeleton
+    method: str
+    report: dict[str, Any] = field(default_factory=dict)
+
+
+def _check_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if len(v) == 0 or len(f) == 0:
+        raise InvalidInput("the mesh has no triangles to build a skeleton from", code="empty_mesh", field="mesh")
+    if not np.all(np.isfinite(v)):
+        raise InvalidInput("the mesh has non-finite vertex positions", code="invalid_mesh", field="mesh")
+    if f.min() < 0 or f.max() >= len(v):
+        raise InvalidInput("a face indexes a vertex that does not exist", code="invalid_mesh", field="mesh")
+    if float(np.ptp(v, axis=0).max()) <= 0:
+        raise InvalidInput("the mesh has zero extent", code="invalid_mesh", field="mesh")
+    return v, f
+
+
+def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "auto", max_joints: int = 64,
+                     up_axis: str | None = None, forward_axis: str | None = None) -> SkeletonPrediction:
+    """Predict a skeleton for a triangle mesh.
+
+    vertices: (V, 3) float64 positions (metres; any frame, the skeleton comes back in the same frame).
+    faces:    (F, 3) int64 triangles.
+    method:   "geometric" (medial skeleton, any shape), "humanoid" (Mixamo template; falls back to geometric
+              when no biped is found, saying so in the report) or "auto" (humanoid when an upright biped is
+              detected with confidence, else geometric).
+    up_axis / forward_axis: "x", "-x", "y", … overrides for the humanoid fit; None = detect.
+    Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric".
+    """
+    if method not in METHODS:
+        raise InvalidInput(f"unknown skeleton method {method!r}; expected one of {', '.join(METHODS)}",
+                           code="invalid_option", field="options.skeleton")
+    if max_joints < 2:
+        raise InvalidInput("max_joints must be at least 2", code="invalid_option", field="options.max_joints")
+    v, f = _check_mesh(vertices, faces)
+    timings: dict[str, float] = {}
+    report: dict[str, Any] = {"requested": method}
+    if method in ("auto", "humanoid"):
+        from simcore.skeleton.humanoid import fit_humanoid
+
+        started = time.perf_counter()
+        fit = fit_humanoid(v, f, max_joints=max_joints, up_axis=up_axis, forward_axis=forward_axis,
+                           force=method == "humanoid")
+        timings["humanoid"] = round(time.perf_counter() - started, 3)
+        report["humanoid"] = fit.report
+        if fit.skeleton is not None:
+            report["timings_s"] = timings
+            return SkeletonPrediction(fit.skeleton, "humanoid", report)
+    started = time.perf_counter()
+    skeleton, geo_report = geometric_skeleton(v, f, max_joints=max_joints)
+    timings["geometric"] = round(time.perf_counter() - started, 3)
+    report["geometric"] = geo_report
+    report["timings_s"] = timings
+    return SkeletonPrediction(skeleton, "geometric", report)

@@ -1,0 +1,89 @@
+"""Pipeline stage `skeleton`: predict (or keep) the skeleton and write skeleton.json.
+
+Options used: `skeleton` (auto | geometric | humanoid | keep), `max_joints`, `up_axis`, `forward_axis`.
+`keep` reuses the upload's own skin (state.mesh.source_rig, already in the mesh frame). The ingested mesh
+is +Y up (ingest applies an `up_axis` override), so the humanoid fit is told "y" when an override was
+given and detects the up axis itself otherwise.
+
+skeleton.json: {"method", "names", "parents", "positions" (mesh frame, metres), "kinds", "orientations",
+"tokens": {"ids", "class", "normalization": {"center", "scale"}} or null with "tokens_error"}.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import TYPE_CHECKING, Any
+
+from simcore.errors import InvalidInput, SimcoreError
+from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.types import Skeleton
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from simcore.pipeline import PipelineState, StageProgress
+
+
+def _tokens(skeleton: Skeleton, vertices: "np.ndarray") -> tuple[dict[str, Any] | None, str | None]:
+    """UniRig token ids of `skeleton` normalised by the mesh's bounding box, or (None, why not)."""
+    try:
+        from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
+    except ImportError as exc:  # the tokenizer is optional for rigging itself
+        return None, f"tokenizer unavailable: {exc}"
+    norm = Normalization.from_points(vertices)
+    tokenizer = SkeletonTokenizer()
+    try:
+        ids = tokenizer.encode(skeleton, norm)
+    except SimcoreError as exc:  # e.g. a kept studio rig longer than the token budget
+        return None, str(exc)
+    return {
+        "ids": ids.tolist(),
+        "class": tokenizer.read_class(ids),
+        "normalization": {"center": norm.center.round(8).tolist(), "scale": round(float(norm.scale), 8)},
+    }, None
+
+
+def run(state: "PipelineState", progress: "StageProgress") -> None:
+    """Set state.skeleton, write skeleton.json, record report["skeleton"]."""
+    options = state.options
+    mesh = state.mesh
+    if mesh is None:
+        raise InvalidInput("the skeleton stage needs an ingested mesh", code="no_mesh", field="mesh")
+    progress.check_cancel()
+    progress(0.05)
+    started = time.perf_counter()
+    report: dict[str, Any]
+    if options.skeleton == "keep":
+        if mesh.source_rig is None:
+            raise InvalidInput("options.skeleton is 'keep' but the uploaded mesh has no skin to keep",
+                               code="no_skeleton", field="options.skeleton")
+        skeleton = mesh.source_rig.skeleton.validate()
+        method, report = "keep", {}
+    else:
+        prediction = predict_skeleton(
+            mesh.vertices, mesh.faces, method=options.skeleton, max_joints=options.max_joints,
+            up_axis="y" if options.up_axis else None, forward_axis=options.forward_axis,
+        )
+        skeleton, method, report = prediction.skeleton, prediction.method, prediction.report
+        if options.skeleton == "humanoid" and method != "humanoid":
+            state.warn("no humanoid was found with confidence; used the geometric skeleton instead")
+    progress.check_cancel()
+    progress(0.8)
+    tokens, token_error = _tokens(skeleton, mesh.vertices)
+    doc = {"method": method, **skeleton.to_dict(), "tokens": tokens}
+    if token_error:
+        doc["tokens_error"] = token_error
+    path = state.workdir / "skeleton.json"
+    path.write_text(json.dumps(doc))
+    state.artifacts["skeleton.json"] = path
+    state.skeleton = skeleton
+    state.report["skeleton"] = {
+        "method": method,
+        "requested": options.skeleton,
+        "joints": skeleton.num_joints,
+        "tokens": None if tokens is None else len(tokens["ids"]),
+        "seconds": round(time.perf_counter() - started, 3),
+        **report,
+    }
+    progress(1.0)

@@ -1,0 +1,62 @@
+"""Bone segments owned by joints, and point-to-segment distances.
+
+A glTF joint's transform moves the bones to its children rigidly, so joint j owns one segment per child
+(j → child). A leaf joint owns a short segment continuing its parent bone (`leaf_extension` × that
+bone's length): leaves such as heads, hands and tail tips carry real weight in artist rigs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from simcore.skeleton.types import Skeleton
+
+
+@dataclass
+class JointSegments:
+    """heads, tails: (S, 3) float64 segment end points; owner: (S,) int64 joint owning each segment."""
+
+    heads: np.ndarray
+    tails: np.ndarray
+    owner: np.ndarray
+
+
+def joint_segments(skeleton: Skeleton, leaf_extension: float = 0.5) -> JointSegments:
+    """Segments of every joint (at least one each; a lone root gets a point)."""
+    pos = skeleton.positions
+    heads, tails, owner = [], [], []
+    for j, kids in enumerate(skeleton.children()):
+        for c in kids:
+            heads.append(pos[j])
+            tails.append(pos[c])
+            owner.append(j)
+        if not kids:
+            p = skeleton.parents[j]
+            heads.append(pos[j])
+            tails.append(pos[j] + leaf_extension * (pos[j] - pos[p]) if p >= 0 else pos[j])
+            owner.append(j)
+    return JointSegments(np.asarray(heads, float), np.asarray(tails, float), np.asarray(owner, np.int64))
+
+
+def closest_on_segments(points: np.ndarray, heads: np.ndarray, tails: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distances (N, S) float64 from points (N, 3) to segments (S, 3)-(S, 3), and parameters t (N, S) in [0, 1]."""
+    p = np.asarray(points, dtype=np.float64)
+    d = tails - heads  # (S, 3)
+    length2 = np.maximum(np.einsum("sc,sc->s", d, d), 1e-30)
+    t = np.clip(((p @ d.T) - np.einsum("sc,sc->s", heads, d)) / length2, 0.0, 1.0)  # (N, S)
+    # |p - h - t d|² expanded so no (N, S, 3) array is built.
+    ph = (p * p).sum(axis=1)[:, None] - 2.0 * p @ heads.T + (heads * heads).sum(axis=1)[None]
+    ph_d = p @ d.T - np.einsum("sc,sc->s", heads, d)[None]
+    dist2 = ph - 2.0 * t * ph_d + t * t * length2[None]
+    return np.sqrt(np.maximum(dist2, 0.0)), t
+
+
+def joint_distances(points: np.ndarray, segments: JointSegments, num_joints: int) -> np.ndarray:
+    """(N, J) float64 Euclidean distance from each point to the nearest segment of each joint."""
+    dist, _ = closest_on_segments(points, segments.heads, segments.tails)
+    out = np.full((len(points), num_joints), np.inf)
+    for s, j in enumerate(segments.owner):
+        np.minimum(out[:, j], dist[:, s], out=out[:, j])
+    return out

@@ -1,0 +1,53 @@
+"""Weight post-processing shared by every skinning method: normalise, smooth along the surface, top-k."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+
+def normalize_rows(weights: np.ndarray) -> np.ndarray:
+    """(V, J) float64 copy with non-negative rows summing to 1; all-zero rows stay zero."""
+    w = np.maximum(np.asarray(weights, dtype=np.float64), 0.0)
+    s = w.sum(axis=1, keepdims=True)
+    return np.divide(w, s, out=np.zeros_like(w), where=s > 0)
+
+
+def smooth_on_surface(weights: np.ndarray, adjacency: sp.csr_matrix, iterations: int, strength: float = 0.5) -> np.ndarray:
+    """Laplacian smoothing of per-vertex weights along mesh edges.
+
+    weights: (V, J) float; adjacency: (V, V) 0/1 CSR (simcore.geometry.laplacian.adjacency). Each pass moves a
+    vertex's weights `strength` of the way to the mean of its neighbours; isolated vertices keep theirs.
+    Row sums are preserved (a mean of normalised rows is normalised).
+    """
+    w = np.asarray(weights, dtype=np.float64)
+    if iterations <= 0 or adjacency.nnz == 0:
+        return w.copy()
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    has = degree > 0
+    mean_op = sp.diags(np.where(has, 1.0 / np.maximum(degree, 1), 0.0)) @ adjacency
+    keep = np.where(has, 1.0 - strength, 1.0)[:, None]
+    move = np.where(has, strength, 0.0)[:, None]
+    for _ in range(iterations):
+        w = keep * w + move * (mean_op @ w)
+    return w
+
+
+def top_k(weights: np.ndarray, k: int, min_weight: float = 1e-4) -> sp.csr_matrix:
+    """(V, J) float32 CSR keeping each row's k largest weights (≥ min_weight of the row), renormalised to 1.
+
+    weights: (V, J) float, non-negative. A row whose weights are all zero stays empty (an unweighted vertex).
+    """
+    w = normalize_rows(weights)
+    v, j = w.shape
+    k = min(k, j)
+    idx = np.argpartition(-w, k - 1, axis=1)[:, :k] if k < j else np.tile(np.arange(j), (v, 1))
+    vals = np.take_along_axis(w, idx, axis=1)
+    vals = np.where(vals >= min_weight, vals, 0.0)
+    s = vals.sum(axis=1, keepdims=True)
+    vals = np.divide(vals, s, out=np.zeros_like(vals), where=s > 0)
+    rows = np.repeat(np.arange(v), k)
+    out = sp.csr_matrix((vals.ravel(), (rows, idx.ravel())), shape=(v, j))
+    out.eliminate_zeros()
+    out.sort_indices()
+    return out.astype(np.float32)

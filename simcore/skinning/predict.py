@@ -1,0 +1,102 @@
+"""Skinning weights for a mesh and a skeleton: the methods, post-processing and the `auto` choice."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import scipy.sparse as sp
+
+from simcore.errors import InvalidInput, LimitExceeded
+from simcore.geometry.laplacian import adjacency
+from simcore.geometry.weld import weld_vertices
+from simcore.skeleton.types import Skeleton
+from simcore.skinning.geodesic import geodesic_weights
+from simcore.skinning.heat import heat_weights
+from simcore.skinning.postprocess import smooth_on_surface, top_k
+from simcore.skinning.quality import quality_scores
+
+Method = Literal["auto", "geodesic", "heat"]
+METHODS: dict[str, Callable[[np.ndarray, np.ndarray, Skeleton], np.ndarray]] = {
+    "geodesic": geodesic_weights,
+    "heat": heat_weights,
+}
+MAX_VERTICES = 2_000_000
+MAX_JOINTS = 1024
+SMOOTH_STRENGTH = 0.25  # per pass; artist weights are sharp, so each pass only nudges
+
+
+@dataclass
+class SkinningResult:
+    """weights: (V, J) float32 CSR, ≤ max_influences per row, rows sum to 1.
+    method: the method that produced them; scores: method → unsupervised quality signals (see quality.py),
+    plus "seconds" per method."""
+
+    weights: sp.csr_matrix
+    method: str
+    scores: dict[str, dict[str, float]] = field(default_factory=dict)
+
+
+def _check_inputs(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, max_influences: int) -> tuple[np.ndarray, np.ndarray]:
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces)
+    if v.ndim != 2 or v.shape[1] != 3 or len(v) == 0:
+        raise InvalidInput("vertices must be a non-empty (V, 3) array", code="invalid_mesh", field="mesh")
+    if len(v) > MAX_VERTICES:
+        raise LimitExceeded(f"{len(v)} vertices is over the skinning limit of {MAX_VERTICES}", code="too_many_vertices", field="mesh")
+    if not np.all(np.isfinite(v)):
+        raise InvalidInput("vertices contain NaN or infinity", code="invalid_mesh", field="mesh")
+    if f.ndim != 2 or f.shape[1] != 3 or len(f) == 0 or not np.issubdtype(f.dtype, np.integer):
+        raise InvalidInput("faces must be a non-empty (F, 3) integer array", code="invalid_mesh", field="mesh")
+    if f.min() < 0 or f.max() >= len(v):
+        raise InvalidInput("a face indexes a vertex that does not exist", code="invalid_mesh", field="mesh")
+    skeleton.validate()
+    if skeleton.num_joints > MAX_JOINTS:
+        raise LimitExceeded(f"{skeleton.num_joints} joints is over the skinning limit of {MAX_JOINTS}", code="too_many_joints", field="skeleton")
+    if max_influences < 1:
+        raise InvalidInput("max_influences must be at least 1", code="invalid_option", field="max_influences")
+    return v, f.astype(np.int64)
+
+
+def compute_weights(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    skeleton: Skeleton,
+    *,
+    method: Method = "auto",
+    max_influences: int = 4,
+    smooth_iterations: int = 2,
+    progress: Callable[[float], None] | None = None,
+) -> SkinningResult:
+    """Skinning weights of a mesh for a skeleton in the same space.
+
+    vertices: (V, 3) float, faces: (F, 3) int, skeleton: J joints. `auto` runs every method and keeps the
+    one with the lowest unsupervised `score`; all methods' scores are returned either way.
+    Raises InvalidInput / LimitExceeded for unusable input.
+    """
+    if method != "auto" and method not in METHODS:
+        raise InvalidInput(f"unknown skinning method {method!r}; use auto, geodesic or heat", code="invalid_option", field="skinning")
+    v, f = _check_inputs(vertices, faces, skeleton, max_influences)
+    report = progress or (lambda fraction: None)
+    welded = weld_vertices(v, f)
+    adj = adjacency(welded.faces, len(welded.vertices))
+    chosen = list(METHODS) if method == "auto" else [method]
+    results: dict[str, sp.csr_matrix] = {}
+    scores: dict[str, dict[str, float]] = {}
+    for i, name in enumerate(chosen):
+        started = time.perf_counter()
+        dense = METHODS[name](v, f, skeleton)
+        # Smooth on the welded surface so seam duplicates stay identical, then map back.
+        on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
+        on_welded[welded.index] = dense
+        dense = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH)[welded.index]
+        results[name] = top_k(dense, max_influences)
+        seconds = time.perf_counter() - started
+        scores[name] = quality_scores(welded.vertices, welded.faces, skeleton, results[name][np.unique(welded.index, return_index=True)[1]])
+        scores[name]["seconds"] = round(seconds, 3)
+        report((i + 1) / len(chosen))
+    best = min(results, key=lambda name: scores[name]["score"])
+    return SkinningResult(results[best], best, scores)

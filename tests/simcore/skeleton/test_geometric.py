@@ -1,0 +1,89 @@
+"""Geometric skeleton: a capsule quadruped with a known skeleton, budgets, several bodies, determinism."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial import cKDTree
+
+from simcore.errors import InvalidInput
+from simcore.geometry.capsule_creatures import capsule_between, quadruped
+from simcore.geometry.voxelize import solid_voxels
+from simcore.skeleton.geometric import geometric_skeleton
+from simcore.skeleton.predict import predict_skeleton
+
+
+def chamfer(a: np.ndarray, b: np.ndarray) -> float:
+    return 0.5 * (cKDTree(b).query(a)[0].mean() + cKDTree(a).query(b)[0].mean())
+
+
+@pytest.fixture(scope="module")
+def dog():
+    vertices, faces, truth = quadruped()
+    skeleton, report = geometric_skeleton(vertices, faces)
+    return vertices, faces, truth, skeleton, report
+
+
+def test_quadruped_skeleton_matches_the_skeleton_it_was_built_on(dog):
+    vertices, _, truth, skeleton, _ = dog
+    skeleton.validate()
+    scale = np.ptp(vertices, axis=0).max()
+    assert chamfer(skeleton.positions, truth.positions) / scale < 0.045
+    assert 0.5 * truth.num_joints <= skeleton.num_joints <= 2 * truth.num_joints
+    leaves = [j for j, kids in enumerate(skeleton.children()) if not kids]
+    assert len(leaves) == 6  # four feet, head, tail
+
+
+def test_joints_lie_inside_the_solid(dog):
+    vertices, faces, _, skeleton, report = dog
+    grid = solid_voxels(vertices, faces, resolution=report["resolution"])
+    assert grid.inside(skeleton.positions).all()
+
+
+def test_same_mesh_gives_the_same_skeleton(dog):
+    vertices, faces, _, skeleton, _ = dog
+    again, _ = geometric_skeleton(vertices.copy(), faces.copy())
+    np.testing.assert_array_equal(again.positions, skeleton.positions)
+    np.testing.assert_array_equal(again.parents, skeleton.parents)
+
+
+def test_root_is_a_body_junction_not_a_limb_tip(dog):
+    _, _, _, skeleton, _ = dog
+    assert len(skeleton.children()[0]) >= 3
+    assert 0.4 < skeleton.positions[0, 1] < 0.8  # on the trunk, not down a leg
+
+
+def test_max_joints_is_respected(dog):
+    vertices, faces, _, _, _ = dog
+    small, _ = geometric_skeleton(vertices, faces, max_joints=8)
+    assert 2 <= small.num_joints <= 8
+    small.validate()
+
+
+def test_separate_bodies_are_joined_into_one_tree():
+    a = capsule_between(np.array([0.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), 0.1)
+    b = capsule_between(np.array([0.6, 0.0, 0.0]), np.array([0.6, 0.6, 0.0]), 0.1)
+    mesh = trimesh.util.concatenate([a, b])
+    skeleton, report = geometric_skeleton(mesh.vertices, mesh.faces)
+    skeleton.validate()
+    assert report["bodies"] == 2 and report["bodies_joined"] == 1
+    assert (skeleton.positions[:, 0] > 0.4).any() and (skeleton.positions[:, 0] < 0.2).any()
+
+
+def test_predict_rejects_empty_meshes_and_unknown_methods(dog):
+    vertices, faces, _, _, _ = dog
+    with pytest.raises(InvalidInput) as err:
+        predict_skeleton(vertices, faces[:0])
+    assert err.value.code == "empty_mesh"
+    with pytest.raises(InvalidInput) as err:
+        predict_skeleton(vertices, faces, method="magic")
+    assert err.value.field == "options.skeleton"
+
+
+def test_predict_geometric_reports_method_and_timing(dog):
+    vertices, faces, _, skeleton, _ = dog
+    prediction = predict_skeleton(vertices, faces, method="geometric")
+    assert prediction.method == "geometric"
+    assert prediction.report["timings_s"]["geometric"] >= 0
+    np.testing.assert_array_equal(prediction.skeleton.positions, skeleton.positions)

@@ -1,0 +1,67 @@
+"""Mixamo humanoid fit: generated capsule bipeds (T/A-pose, turned) and the dev Mixamo characters."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simcore.geometry.capsule_creatures import quadruped, stick_humanoid
+from simcore.io.gltf_document import GltfDocument
+from simcore.io.gltf_rig import read_rigged_asset
+from simcore.skeleton.humanoid import fit_humanoid
+from simcore.skeleton.mixamo import BODY_JOINTS, full_name
+from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.types import JointKind
+
+LIMB_ENDS = ("LeftHand", "RightHand", "LeftFoot", "RightFoot", "Head", "Hips", "LeftForeArm", "RightLeg")
+
+
+def joint(skeleton, bare: str) -> np.ndarray:
+    return skeleton.positions[skeleton.names.index(full_name(bare))]
+
+
+@pytest.mark.parametrize("pose,facing", [("t", "+z"), ("a", "+z"), ("t", "+x"), ("a", "-z")])
+def test_capsule_biped_gets_the_mixamo_body_where_it_was_built(pose, facing):
+    vertices, faces, truth = stick_humanoid(pose=pose, facing=facing)
+    fit = fit_humanoid(vertices, faces)
+    assert fit.skeleton is not None, fit.report
+    skeleton = fit.skeleton.validate()
+    assert skeleton.names[: len(BODY_JOINTS)] == [full_name(n) for n in BODY_JOINTS]
+    assert all(k == JointKind.BODY for k in skeleton.kinds[: len(BODY_JOINTS)])
+    assert fit.report["facing"] == facing and fit.report["up"] == "+y"
+    for name in LIMB_ENDS:  # 1.8 m tall: within 9 cm, and on the correct side
+        assert np.linalg.norm(joint(skeleton, name) - truth[name]) < 0.09, name
+
+
+def test_quadruped_is_not_taken_for_a_humanoid():
+    vertices, faces, _ = quadruped()
+    prediction = predict_skeleton(vertices, faces, method="auto")
+    assert prediction.method == "geometric"
+    assert prediction.report["humanoid"]["detected"] is False
+
+
+def test_lying_biped_is_found_with_its_up_axis():
+    vertices, faces, truth = stick_humanoid()
+    turn = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # +Y up → +Z up (a Z-up export)
+    fit = fit_humanoid(vertices @ turn.T, faces)
+    assert fit.skeleton is not None and fit.report["up"] == "+z"
+    assert np.linalg.norm(joint(fit.skeleton, "LeftHand") - truth["LeftHand"] @ turn.T) < 0.09
+
+
+def test_too_small_a_joint_budget_falls_back_to_geometric():
+    vertices, faces, _ = stick_humanoid()
+    prediction = predict_skeleton(vertices, faces, method="humanoid", max_joints=16)
+    assert prediction.method == "geometric" and prediction.skeleton.num_joints <= 16
+    assert "max_joints" in prediction.report["humanoid"]["reason"]
+
+
+@pytest.mark.parametrize("asset", ["xbot.glb", "soldier.glb"])
+def test_dev_mixamo_characters_get_joints_near_their_own(dev_assets, asset):
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / asset).read_bytes()))
+    scale = np.ptp(rig.vertices, axis=0).max()
+    prediction = predict_skeleton(rig.vertices, rig.faces, method="auto")
+    assert prediction.method == "humanoid"
+    truth = {n: p for n, p in zip(rig.skeleton.names, rig.skeleton.positions)}
+    for name in ("LeftHand", "RightHand", "LeftFoot", "RightFoot", "Neck", "LeftArm", "RightLeg"):
+        err = np.linalg.norm(joint(prediction.skeleton, name) - truth[full_name(name)]) / scale
+        assert err < 0.06, (name, err)

@@ -1,0 +1,97 @@
+"""Skinning methods on a generated bent tube creature with a 3-joint chain."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from simcore.errors import InvalidInput
+from simcore.metrics.skinning import weight_stats
+from simcore.skeleton.types import Skeleton
+from simcore.skinning.geodesic import geodesic_distances
+from simcore.skinning.predict import compute_weights
+
+
+@pytest.fixture(scope="module")
+def bent_tube() -> tuple[np.ndarray, np.ndarray, Skeleton]:
+    """A 3 m capsule (radius 0.3) along +Y, upper half bent 60° towards +X about the middle joint."""
+    mesh = trimesh.creation.capsule(height=3.0, radius=0.3, count=[16, 16])
+    v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, 0.12)
+    v = v[:, [0, 2, 1]] * [1, 1, -1]  # capsule axis Z → Y (a proper rotation: det = +1)
+    f = f[:, [0, 2, 1]]
+    bend = np.deg2rad(60.0)
+    upper = v[:, 1] > 0.0
+    rot = np.array([[np.cos(bend), np.sin(bend), 0], [-np.sin(bend), np.cos(bend), 0], [0, 0, 1]])
+    v[upper] = v[upper] @ rot.T
+    joints = np.array([[0.0, -1.5, 0.0], [0.0, 0.0, 0.0], rot @ [0.0, 1.5, 0.0]])
+    return v, f, Skeleton(joints, np.array([-1, 0, 1]), ["root", "mid", "tip"])
+
+
+def _dominant_joint_near_bones(v: np.ndarray, skeleton: Skeleton, weights: np.ndarray) -> None:
+    """Vertices around the middle of bone root→mid belong to root; around mid→tip's bone, to mid."""
+    lower = np.linalg.norm(v - [0.0, -0.75, 0.0], axis=1) < 0.45
+    upper = np.linalg.norm(v - skeleton.positions[2] * 0.5, axis=1) < 0.45
+    assert lower.sum() > 20 and upper.sum() > 20
+    assert np.mean(weights[lower].argmax(axis=1) == 0) > 0.95
+    assert np.mean(weights[upper].argmax(axis=1) == 1) > 0.95
+    assert weights[lower, 0].mean() > 0.8 and weights[upper, 1].mean() > 0.8
+
+
+@pytest.mark.parametrize("method", ["geodesic", "heat", "auto"])
+def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method: str) -> None:
+    v, f, skeleton = bent_tube
+    result = compute_weights(v, f, skeleton, method=method, max_influences=2, smooth_iterations=2)
+    w = result.weights.toarray()
+    assert result.weights.shape == (len(v), 3) and result.weights.dtype == np.float32
+    stats = weight_stats(result.weights)
+    assert stats["unweighted_vertices"] == 0
+    assert stats["max_influences"] <= 2
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-5)
+    _dominant_joint_near_bones(v, skeleton, w)
+    expected = {"geodesic", "heat"} if method == "auto" else {method}
+    assert set(result.scores) == expected and result.method in expected
+    assert all(np.isfinite(s["score"]) for s in result.scores.values())
+
+
+def test_duplicate_vertices_get_identical_weights(bent_tube) -> None:
+    """Flat-shaded copy (every corner its own vertex): coincident vertices must not get different weights."""
+    v, f, skeleton = bent_tube
+    flat_v, flat_f = v[f.reshape(-1)], np.arange(f.size).reshape(-1, 3)
+    result = compute_weights(flat_v, flat_f, skeleton, method="heat")
+    w = result.weights.toarray()
+    corner_of = f.reshape(-1)  # original vertex behind each flat corner
+    first_corner = np.full(len(v), -1)
+    first_corner[corner_of[::-1]] = np.arange(len(corner_of))[::-1]
+    np.testing.assert_allclose(w, w[first_corner[corner_of]], atol=1e-6)
+    assert weight_stats(result.weights)["unweighted_vertices"] == 0
+    _dominant_joint_near_bones(flat_v, skeleton, w)
+
+
+def test_geodesic_distance_goes_around_not_across_a_gap() -> None:
+    """A U-shaped tube: the straight line between the arms crosses empty space, the geodesic must not."""
+    arms = []
+    for x in (-0.6, 0.6):
+        arm = trimesh.creation.capsule(height=2.0, radius=0.2, count=[12, 12])
+        arm.apply_translation([x, 0.0, 0.0])
+        arms.append(arm)
+    base = trimesh.creation.capsule(height=1.2, radius=0.2, count=[12, 12])
+    base.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))
+    base.apply_translation([0.0, 0.0, -1.0])
+    mesh = trimesh.util.concatenate(arms + [base])
+    skeleton = Skeleton(np.array([[-0.6, 0.0, -0.9], [-0.6, 0.0, 0.9]]), np.array([-1, 0]), ["left", "left_tip"])
+    d = geodesic_distances(mesh.vertices, mesh.faces, skeleton, leaf_extension=0.0)
+    right_top = np.flatnonzero((mesh.vertices[:, 0] > 0.7) & (mesh.vertices[:, 2] > 0.8))
+    assert len(right_top) > 0
+    # Straight line from the right arm's top to the left bone ≈ 1.2 m; through the U it is ≥ 1.8 m.
+    assert d[right_top, 0].min() > 1.8
+
+
+def test_rejects_bad_input(bent_tube) -> None:
+    v, f, skeleton = bent_tube
+    with pytest.raises(InvalidInput) as err:
+        compute_weights(v, f + len(v), skeleton)
+    assert err.value.code == "invalid_mesh"
+    with pytest.raises(InvalidInput) as err:
+        compute_weights(v, f, skeleton, method="magic")  # type: ignore[arg-type]
+    assert err.value.field == "skinning"

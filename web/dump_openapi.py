@@ -1,0 +1,40 @@
+"""Write the API's OpenAPI document (plus the JobOptions schema) for the dashboard's typed client.
+
+Usage: python web/dump_openapi.py web/openapi.json
+The `options` form field of POST /api/v1/jobs is a JSON string, so its model does not appear in the
+generated spec; it is added under components.schemas.JobOptions so the page types what it submits.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+
+def openapi_document() -> dict:
+    """The spec of `api.app.create_app()` built against a throwaway data directory."""
+    with tempfile.TemporaryDirectory(prefix="rigforge-openapi-") as tmp:
+        os.environ["RIGFORGE_DATA_DIR"] = tmp  # create_app makes its data dir; keep the checkout clean
+        from api.app import create_app
+        from simcore.options import JobOptions
+
+        spec = create_app().openapi()
+    schemas = spec.setdefault("components", {}).setdefault("schemas", {})
+    options = JobOptions.model_json_schema(ref_template="#/components/schemas/{model}")
+    schemas.update(options.pop("$defs", {}))
+    schemas["JobOptions"] = options
+    return spec
+
+
+def main() -> None:
+    out = Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).with_name("openapi.json"))
+    out.write_text(json.dumps(openapi_document(), indent=1, sort_keys=True) + "\n")
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere in the checkout
+    main()
