@@ -69,12 +69,13 @@ def eval_skin(
     method: Annotated[str, typer.Option(help="auto, geodesic, heat or all")] = "auto",
     peers: Annotated[Path, typer.Option(help="folder of peer weights: PEERS/<peer>/<asset>.npz")] = DEFAULT_PEERS,
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
+    pipeline: Annotated[bool, typer.Option(help="add full-pipeline rows: our skeleton + our weights vs the artist's rig")] = False,
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
     methods = list(OUR_METHODS) if method == "all" else [method]
-    console = Console()
+    console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:
-        report = evaluate_skinning(directory, methods, peers=peers, on_asset=lambda n: status.update(f"skinning {n}"))
+        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, on_asset=lambda n: status.update(f"skinning {n}"))
     render(report, console)
     if json_path is not None:
         json_path.parent.mkdir(parents=True, exist_ok=True)

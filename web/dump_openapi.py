@@ -16,12 +16,25 @@ from pathlib import Path
 
 def openapi_document() -> dict:
     """The spec of `api.app.create_app()` built against a throwaway data directory."""
+    from api.settings import get_settings
+
+    saved, saved_tempdir = os.environ.get("RIGFORGE_DATA_DIR"), tempfile.tempdir
     with tempfile.TemporaryDirectory(prefix="rigforge-openapi-") as tmp:
         os.environ["RIGFORGE_DATA_DIR"] = tmp  # create_app makes its data dir; keep the checkout clean
-        from api.app import create_app
-        from simcore.options import JobOptions
+        get_settings.cache_clear()
+        try:
+            from api.app import create_app
 
-        spec = create_app().openapi()
+            spec = create_app().openapi()
+        finally:
+            if saved is None:
+                os.environ.pop("RIGFORGE_DATA_DIR", None)
+            else:
+                os.environ["RIGFORGE_DATA_DIR"] = saved
+            get_settings.cache_clear()
+            tempfile.tempdir = saved_tempdir  # create_app points multipart spooling into the data dir
+    from simcore.options import JobOptions
+
     schemas = spec.setdefault("components", {}).setdefault("schemas", {})
     options = JobOptions.model_json_schema(ref_template="#/components/schemas/{model}")
     schemas.update(options.pop("$defs", {}))

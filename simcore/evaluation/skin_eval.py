@@ -6,6 +6,11 @@ deformation protocol of `simcore.metrics.skinning` (8 seeded random poses, unit-
 deformation column poses the mesh with the asset's own animation clips where it has them (every clip,
 sampled at CLIP_FPS, at most CLIP_FRAMES frames each). Peer weights (e.g. Blender's, written by
 bench/peers/blender_weights.py as PEERS/<peer>/<asset>.npz) are scored the same way, row by row.
+
+Full-pipeline rows (`pipeline=True`, method "pipeline"): our predicted skeleton + our weights. Each of our
+joints is matched to the weight-bearing artist joint whose bones lie nearest to its own bone midpoints and
+follows that joint's motion under the same poses; by linearity of LBS that equals scoring our weights summed
+onto the matched artist joints (W_ours · C, C one-hot J_ours × J_gt), so every metric applies unchanged.
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ from simcore.errors import InvalidInput, SimcoreError
 from simcore.evaluation.skeleton_eval import read_categories
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
+from simcore.skeleton.types import Skeleton
+from simcore.skinning.bones import closest_on_segments, joint_segments
 from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
 from simcore.skinning.predict import compute_weights
 
@@ -41,6 +48,7 @@ class SkinRow:
     metrics: dict[str, float | None] = field(default_factory=dict)
     chosen: str | None = None  # the method `auto` picked
     error: str | None = None
+    note: str | None = None
 
     def to_dict(self) -> dict:
         out: dict = {"name": self.name, "category": self.category, "method": self.method}
@@ -49,6 +57,8 @@ class SkinRow:
             out["chosen"] = self.chosen
         if self.error:
             out["error"] = self.error
+        if self.note:
+            out["note"] = self.note
         return out
 
 
@@ -136,6 +146,35 @@ def score_weights(asset: RiggedAsset, weights: sp.spmatrix | np.ndarray, clips: 
     return out
 
 
+def joint_correspondence(ours: Skeleton, gt: Skeleton, gt_weights: sp.spmatrix) -> np.ndarray:
+    """(J_ours,) int64: the weight-bearing ground-truth joint whose bone segments are nearest our joint's bones."""
+    mine, theirs = joint_segments(ours), joint_segments(gt)
+    bearing = np.asarray(abs(gt_weights).sum(axis=0)).ravel() > 0
+    keep = bearing[theirs.owner]
+    if not keep.any():
+        keep[:] = True
+    mid = 0.5 * (mine.heads + mine.tails)
+    dist = closest_on_segments(mid, theirs.heads[keep], theirs.tails[keep])[0]  # (S_ours, S_gt kept)
+    owner = theirs.owner[keep]
+    out = np.zeros(ours.num_joints, np.int64)
+    for j in range(ours.num_joints):
+        rows = dist[mine.owner == j]
+        out[j] = owner[int(np.argmin(rows.min(axis=0)))]
+    return out
+
+
+def pipeline_weights(asset: RiggedAsset) -> tuple[sp.csr_matrix, str]:
+    """Our skeleton + our weights for the bind mesh, carried onto the artist's joints: ((V, J_gt), note)."""
+    from simcore.skeleton.predict import predict_skeleton
+
+    prediction = predict_skeleton(asset.vertices, asset.faces, method="auto")
+    ours = compute_weights(asset.vertices, asset.faces, prediction.skeleton)
+    corr = joint_correspondence(prediction.skeleton, asset.skeleton, asset.weights)
+    onto = sp.csr_matrix((np.ones(len(corr)), (np.arange(len(corr)), corr)), shape=(len(corr), asset.skeleton.num_joints))
+    note = f"{prediction.skeleton.num_joints} joints ({prediction.method}), weights {ours.method}"
+    return (ours.weights @ onto).tocsr(), note
+
+
 def _peer_weights(peers: Path, name: str, shape: tuple[int, int]) -> dict[str, tuple[np.ndarray, float]]:
     """peer name → (weights (V, J), seconds) from PEERS/<peer>/<name>.npz files that match the asset's shape."""
     out = {}
@@ -153,9 +192,11 @@ def evaluate_skinning(
     methods: list[str],
     *,
     peers: Path | None = None,
+    pipeline: bool = False,
     on_asset: Callable[[str], None] | None = None,
 ) -> SkinEvaluation:
-    """Skin every rigged asset in `directory` with each of our `methods`; score peers found under `peers`."""
+    """Skin every rigged asset in `directory` with each of our `methods`; score peers found under `peers`;
+    with `pipeline`, add full-pipeline rows (our skeleton and weights vs the artist's rig)."""
     for m in methods:
         if m not in OUR_METHODS:
             raise InvalidInput(f"unknown skinning method {m!r}; use {', '.join(OUR_METHODS)} or all", code="invalid_option", field="method")
@@ -178,6 +219,16 @@ def evaluate_skinning(
             except Exception as exc:  # one failing asset must not hide the others; the error is reported
                 kind = exc.code if isinstance(exc, SimcoreError) else type(exc).__name__
                 report.rows.append(SkinRow(name, category, method, error=f"{kind}: {exc}"[:200]))
+        if pipeline:
+            started = time.perf_counter()
+            try:
+                weights, note = pipeline_weights(asset)
+                metrics = score_weights(asset, weights, clips)
+                metrics["seconds"] = time.perf_counter() - started
+                report.rows.append(SkinRow(name, category, "pipeline", metrics, note=note))
+            except Exception as exc:  # reported per row, like the methods above
+                kind = exc.code if isinstance(exc, SimcoreError) else type(exc).__name__
+                report.rows.append(SkinRow(name, category, "pipeline", error=f"{kind}: {exc}"[:200]))
         if peers is not None and peers.is_dir():
             for peer, (weights, seconds) in _peer_weights(peers, name, asset.weights.shape).items():
                 metrics = score_weights(asset, weights, clips)

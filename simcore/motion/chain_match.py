@@ -29,6 +29,8 @@ def normalised_rest(skeleton: Skeleton) -> np.ndarray:
 def branch_root(skeleton: Skeleton) -> int:
     """The first joint below the root with several children (a static root chain above the hips is skipped)."""
     children = skeleton.children()
+    if max(len(c) for c in children) < 2:
+        return 0  # a single chain (tail, two-bone cylinder): its root is the place to anchor
     j = 0
     while len(children[j]) == 1:
         j = children[j][0]

@@ -3,8 +3,8 @@
 Placement modes:
   "joints": 8 points on the corners of a cube of half-edge `spacing / 2` around each joint.
   "bones":  8 points spread along the bone cores leaving each joint (split over its child bones, evenly
-            spaced, the joint end first); leaf joints get the "joints" cube. Each point moves with the joint
-            at the bone's parent end.
+            spaced, the joint end first); a leaf joint's core runs to the centroid of the vertices it
+            dominates, to their far end (else it gets the "joints" cube). Each point moves with the joint at the bone's start.
 Within a frame, joint world transforms are interpolated (slerp rotations, lerp positions) at every substep and
 the velocity imposed over a substep is the displacement over it divided by dt, so the drivers follow the
 animated skeleton exactly at frame times.
@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
 from simcore.io.joint_tracks import joint_tracks
@@ -40,18 +41,45 @@ class DrivingPoints:
         return int(len(self.rest))
 
 
-def place_drivers(skeleton: Skeleton, mode: str, spacing: float) -> DrivingPoints:
-    """PER_JOINT driving points for every joint (see module doc); spacing: grid cell size, metres."""
+def leaf_tips(skeleton: Skeleton, vertices: np.ndarray, weights: sp.spmatrix) -> dict[int, np.ndarray]:
+    """Bone-core end of each leaf joint, from the vertices it dominates (weight > 0.5): along the direction to
+    their centroid, as far as the 90th percentile of their extent in that direction.
+
+    A leaf has no child to point its bone at; without this its part (a head, a tail tip) would be held by a
+    cube at its base only and droop. vertices: (V, 3); weights: (V, J).
+    """
+    w = sp.csc_matrix(weights)
+    out = {}
+    for j, kids in enumerate(skeleton.children()):
+        own = np.asarray(vertices, np.float64)[w[:, j].toarray().ravel() > 0.5]
+        if kids or not len(own):
+            continue
+        axis = own.mean(axis=0) - skeleton.positions[j]
+        length = float(np.linalg.norm(axis))
+        if length > 1e-9:
+            reach = float(np.percentile((own - skeleton.positions[j]) @ (axis / length), 90))
+            out[j] = skeleton.positions[j] + axis / length * max(reach, length)
+    return out
+
+
+def place_drivers(skeleton: Skeleton, mode: str, spacing: float, tips: dict[int, np.ndarray] | None = None) -> DrivingPoints:
+    """PER_JOINT driving points for every joint (see module doc); spacing: grid cell size, metres.
+
+    tips: bone-core ends for leaf joints (`leaf_tips`); in "bones" mode a leaf's 8 points then run from the
+    joint to its tip instead of sitting on a cube around the joint.
+    """
     pos, children = skeleton.positions, skeleton.children()
+    tips = tips or {}
     points, owners = [], []
     for j in range(skeleton.num_joints):
-        if mode == "bones" and children[j]:
-            share = np.full(len(children[j]), PER_JOINT // len(children[j]))
+        ends = [pos[c] for c in children[j]] or ([tips[j]] if j in tips else [])
+        if mode == "bones" and ends:
+            share = np.full(len(ends), PER_JOINT // len(ends))
             share[: PER_JOINT - share.sum()] += 1  # 8 in total even with 3, 5, ... children
-            for c, k in zip(children[j], share):
+            for end, k in zip(ends, share):
                 if k:
                     t = np.arange(k)[:, None] / max(k, 1)  # joint end first, child end excluded
-                    points.append(pos[j] + t * (pos[c] - pos[j]))
+                    points.append(pos[j] + t * (end - pos[j]))
                     owners.append(np.full(k, j))
         else:
             points.append(pos[j] + CUBE * 0.5 * spacing)

@@ -59,7 +59,7 @@ def synthetic_bar(count: int = 12) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(mesh.vertices)[:, [2, 1, 0]], np.asarray(mesh.faces)[:, [0, 2, 1]]
 
 
-def recover_materials(config: FitConfig, frames: int = 6, fps: float = 25.0, true_E: tuple[float, float] = (1.5e5, 1.5e4),
+def recover_materials(config: FitConfig, frames: int = 6, fps: float = 25.0, true_E: tuple[float, float] = (5.5e4, 2.8e4),
                       log: Callable[[str], None] = lambda s: None) -> dict[str, Any]:
     """Generate a sequence with known E per prototype (two prototypes, one per half of a bar driven at one end),
     then fit from the preset's E. Velocities start at the generator's (known) values and are still optimised."""
@@ -75,7 +75,7 @@ def recover_materials(config: FitConfig, frames: int = 6, fps: float = 25.0, tru
     truth = np.empty(2)
     truth[order] = true_E
     gen = PhysicsFit(dataclasses.replace(scene, velocities=velocity), config)
-    gen.set_materials(np.log(truth / scene.protos.E))
+    gen.set_materials(gen.theta_of(truth))
     targets = gen.simulate()
     fit_scene = dataclasses.replace(scene, targets=targets, velocities=velocity)
     log(f"synthetic: {len(scene.x0)} particles, true E {truth.round(1).tolist()}")

@@ -12,6 +12,7 @@ from __future__ import annotations
 import warp as wp
 
 wp.config.quiet = True
+wp.set_module_options({"optimization_level": 3})  # CPU default is -O2; these few hot kernels are worth -O3
 
 BLOCK = 4  # nodes per block edge; n must be a multiple of it
 J_MIN = 0.05  # det F clamp: below this (or non-finite) the F update is rejected and counted
@@ -68,9 +69,21 @@ def stencil_base(x: wp.vec3, origin: wp.vec3, inv_dx: float, n: int) -> wp.vec3i
 
 
 @wp.func
-def bspline_weights(f: float) -> wp.vec3:
-    """Quadratic B-spline weights of the 3 nodes at offsets 0, 1, 2 for a fractional position f in [0.5, 1.5)."""
-    return wp.vec3(0.5 * (1.5 - f) * (1.5 - f), 0.75 - (f - 1.0) * (f - 1.0), 0.5 * (f - 0.5) * (f - 0.5))
+def stencil_fraction(x: wp.vec3, origin: wp.vec3, inv_dx: float, b: wp.vec3i) -> wp.vec3:
+    """Position of x relative to the stencil's lowest node, in cells (each component in [0.5, 1.5) inside the grid)."""
+    return (x - origin) * inv_dx - wp.vec3(float(b[0]), float(b[1]), float(b[2]))
+
+
+@wp.func
+def bspline_rows(fx: wp.vec3) -> wp.mat33:
+    """Row a: quadratic B-spline weights of the nodes at offsets 0, 1, 2 along axis a; node weight = W[0,i] W[1,j] W[2,k]."""
+    out = wp.mat33()
+    for a in range(3):
+        f = fx[a]
+        out[a, 0] = 0.5 * (1.5 - f) * (1.5 - f)
+        out[a, 1] = 0.75 - (f - 1.0) * (f - 1.0)
+        out[a, 2] = 0.5 * (f - 0.5) * (f - 0.5)
+    return out
 
 
 @wp.kernel
@@ -132,11 +145,8 @@ def p2g(
     p = wp.tid()
     inv_dx = 1.0 / dx
     b = stencil_base(x[p], origin, inv_dx, n)
-    g = (x[p] - origin) * inv_dx
-    fx = g - wp.vec3(float(b[0]), float(b[1]), float(b[2]))
-    wx = bspline_weights(fx[0])
-    wy = bspline_weights(fx[1])
-    wz = bspline_weights(fx[2])
+    fx = stencil_fraction(x[p], origin, inv_dx, b)
+    W = bspline_rows(fx)
     Fp = F[p]
     R = polar_rotation(Fp)
     J = wp.determinant(Fp)
@@ -146,7 +156,7 @@ def p2g(
     for i in range(3):
         for j in range(3):
             for k in range(3):
-                w = wx[i] * wy[j] * wz[k]
+                w = W[0, i] * W[1, j] * W[2, k]
                 dpos = (wp.vec3(float(i), float(j), float(k)) - fx) * dx
                 node = node_index(b[0] + i, b[1] + j, b[2] + k, n)
                 wp.atomic_add(grid_mv, node, w * (mv + affine * dpos))
@@ -167,14 +177,11 @@ def drivers_to_grid(
     d = wp.tid()
     inv_dx = 1.0 / dx
     b = stencil_base(dp[d], origin, inv_dx, n)
-    fx = (dp[d] - origin) * inv_dx - wp.vec3(float(b[0]), float(b[1]), float(b[2]))
-    wx = bspline_weights(fx[0])
-    wy = bspline_weights(fx[1])
-    wz = bspline_weights(fx[2])
+    W = bspline_rows(stencil_fraction(dp[d], origin, inv_dx, b))
     for i in range(3):
         for j in range(3):
             for k in range(3):
-                w = wx[i] * wy[j] * wz[k]
+                w = W[0, i] * W[1, j] * W[2, k]
                 node = node_index(b[0] + i, b[1] + j, b[2] + k, n)
                 wp.atomic_add(drv_v, node, w * dv[d])
                 wp.atomic_add(drv_w, node, w)
@@ -270,16 +277,14 @@ def g2p(
     p = wp.tid()
     inv_dx = 1.0 / dx
     b = stencil_base(x[p], origin, inv_dx, n)
-    fx = (x[p] - origin) * inv_dx - wp.vec3(float(b[0]), float(b[1]), float(b[2]))
-    wx = bspline_weights(fx[0])
-    wy = bspline_weights(fx[1])
-    wz = bspline_weights(fx[2])
+    fx = stencil_fraction(x[p], origin, inv_dx, b)
+    W = bspline_rows(fx)
     vel = wp.vec3(0.0)
     Cn = wp.mat33(0.0)
     for i in range(3):
         for j in range(3):
             for k in range(3):
-                w = wx[i] * wy[j] * wz[k]
+                w = W[0, i] * W[1, j] * W[2, k]
                 dpos = (wp.vec3(float(i), float(j), float(k)) - fx) * dx
                 gv = grid_v[node_index(b[0] + i, b[1] + j, b[2] + k, n)]
                 vel = vel + gv * w

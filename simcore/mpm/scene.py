@@ -17,7 +17,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
-from simcore.mpm.drivers import DrivingPoints, animation_world_transforms, driver_positions, place_drivers, substep_drive
+from simcore.mpm.drivers import (DrivingPoints, animation_world_transforms, driver_positions, leaf_tips, place_drivers,
+                                  substep_drive)
 from simcore.mpm.materials import PRESETS, max_wave_speed, particle_lame, prototype_weights, region_stiffness, seed_prototypes
 from simcore.mpm.sampling import ParticleSample, nearest_rows, sample_volume
 from simcore.mpm.simulate import FramePlan
@@ -132,7 +133,7 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
         stiffness = region_stiffness(pw, skeleton.names, opts.bone_stiffness)
     mu, lam = particle_lame(prototype_weights(sample.positions, protos), protos, stiffness)
 
-    drivers = place_drivers(skeleton, opts.drivers, dx)
+    drivers = place_drivers(skeleton, opts.drivers, dx, tips=leaf_tips(skeleton, vertices, weights))
     frame_dt = 1.0 / float(animation.fps)
     dt_paper = (1.0 / PAPER_FPS) / opts.substeps
     dt_wave = CFL_WAVE * dx / max_wave_speed(protos, material.density, stiffness)

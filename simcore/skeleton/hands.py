@@ -17,26 +17,36 @@ from simcore.geometry.voxelize import solid_voxels
 from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.medial import medial_forest
+from simcore.skeleton.finger_template import template_fingers
 from simcore.skeleton.mixamo import FINGERS
 
-HAND_RESOLUTION = 64
+HAND_RESOLUTION = 96  # 64 merges fingers that are a few millimetres apart (Mixamo Soldier); 128 costs 3× the time
+STAND_OUT = 0.6  # a sixth finger-like tip longer than this × the fifth means the "fingers" are surface noise
 MIN_FINGER_RATIO = 0.35  # shortest / longest free finger branch (the thumb's is the shortest on real hands)
 PHALANX = {"Thumb": (0.15, 0.5, 0.8), "Other": (0.0, 0.42, 0.72)}  # fraction of knuckle-branch → tip arc
 
 
-def _one_hand(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray, elbow: np.ndarray,
-              forward: np.ndarray) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
+def _hand_crop(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray,
+               elbow: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The triangles inside a sphere over the hand, re-indexed: ((V', 3), (F', 3)), or None when too few."""
     forearm = float(np.linalg.norm(wrist - elbow))
     d = (wrist - elbow) / max(forearm, 1e-12)
     centre, radius = wrist + 0.35 * forearm * d, 0.75 * forearm
     near = np.linalg.norm(vertices - centre, axis=1) < radius
     keep = near[faces].all(axis=1)
     if keep.sum() < 20:
-        return None, {"reason": "too few triangles around the hand"}
+        return None
     used = np.unique(faces[keep])
     remap = -np.ones(len(vertices), np.int64)
     remap[used] = np.arange(len(used))
-    sub_v, sub_f = vertices[used], remap[faces[keep]]
+    return vertices[used], remap[faces[keep]]
+
+
+def _one_hand(sub_v: np.ndarray, sub_f: np.ndarray, wrist: np.ndarray, elbow: np.ndarray,
+              forward: np.ndarray) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
+    """Fingers from the medial tree of the hand crop (sub_v (V, 3), sub_f (F, 3)), or None with a reason."""
+    forearm = float(np.linalg.norm(wrist - elbow))
+    d = (wrist - elbow) / max(forearm, 1e-12)
     grid = solid_voxels(sub_v, sub_f, resolution=HAND_RESOLUTION)
     forest = medial_forest(grid)
     ranked, _, _ = rank_bodies(grid, forest)
@@ -59,7 +69,11 @@ def _one_hand(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray, elbow:
         while parent[path[-1]] >= 0 and len(forest.adjacency[path[-1]]) <= 2 or len(path) == 1:
             path.append(parent[path[-1]])
         chains[tip] = path  # tip → its branch point
-    tips = sorted(tips, key=lambda n: (-path_length(pos, chains[n]), n))[:5]
+    tips = sorted(tips, key=lambda n: (-path_length(pos, chains[n]), n))
+    if len(tips) > 5 and path_length(pos, chains[tips[5]]) > STAND_OUT * path_length(pos, chains[tips[4]]):
+        return None, {"reason": "no five finger branches stand out from the other tips (mitten or noisy hand)",
+                      "tips": len(tips)}
+    tips = tips[:5]
     lengths = [path_length(pos, chains[n]) for n in tips]
     if min(lengths) < MIN_FINGER_RATIO * max(lengths) or max(lengths) < 0.2 * forearm:
         return None, {"reason": "finger-like tips are too unequal or too short to be fingers", "tips": len(tips)}
@@ -81,13 +95,25 @@ def fit_fingers(vertices: np.ndarray, faces: np.ndarray, body: dict[str, np.ndar
     """
     out: dict[str, np.ndarray] = {}
     report: dict[str, Any] = {}
+    v, f = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
+    template_used = False
     for side in ("Left", "Right"):
-        fingers, info = _one_hand(np.asarray(vertices, np.float64), np.asarray(faces, np.int64),
-                                  body[f"{side}Hand"], body[f"{side}ForeArm"], forward)
+        wrist, elbow = body[f"{side}Hand"], body[f"{side}ForeArm"]
+        crop = _hand_crop(v, f, wrist, elbow)
+        if crop is None:
+            report[side.lower()] = {"reason": "too few triangles around the hand"}
+            report["separable"] = False
+            return None, report
+        fingers, info = _one_hand(crop[0], crop[1], wrist, elbow, forward)
+        if fingers is None:  # touching fingers: the mesh's sections can still show them
+            fingers, template_info = template_fingers(crop[0], crop[1], wrist, elbow, forward, side)
+            info = {**info, "fallback": template_info}
+            template_used |= fingers is not None
         report[side.lower()] = info
         if fingers is None:
             report["separable"] = False
             return None, report
         out.update({f"{side}Hand{k}": p for k, p in fingers.items()})
     report["separable"] = True
+    report["template"] = template_used
     return out, report

@@ -42,7 +42,7 @@ def heat_weights(
     faces: np.ndarray,
     skeleton: Skeleton,
     *,
-    leaf_extension: float = 0.5,
+    leaf_extension: float = 0.5,  # 0.5 vs 1.0: four-asset L1 0.471 vs 0.485, all 0.538 vs 0.531
     resolution: int = 64,
     heat_c: float = HEAT_C,
     min_weight: float = 1e-3,

@@ -87,3 +87,27 @@ def test_predict_geometric_reports_method_and_timing(dog):
     assert prediction.method == "geometric"
     assert prediction.report["timings_s"]["geometric"] >= 0
     np.testing.assert_array_equal(prediction.skeleton.positions, skeleton.positions)
+
+
+def test_flat_strip_gets_an_end_to_end_chain_along_its_length():
+    # The glTF SimpleSkin layout: a 1 × 2 strip in the XY plane, no thickness to voxelise.
+    xs, ys = np.meshgrid([-0.5, 0.5], np.linspace(0.0, 2.0, 5))
+    vertices = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(10)])
+    faces = np.array([[2 * i, 2 * i + 1, 2 * i + 3] for i in range(4)] + [[2 * i, 2 * i + 3, 2 * i + 2] for i in range(4)])
+    skeleton, report = geometric_skeleton(vertices, faces)
+    assert report["sheet"] is True
+    np.testing.assert_allclose(skeleton.positions, [[0, 0, 0], [0, 1, 0], [0, 2, 0]], atol=1e-9)
+    assert skeleton.parents.tolist() == [-1, 0, 1]
+
+
+def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
+    vertices, faces, _, pulled, _ = dog
+    from simcore.skeleton.geometric import GeometricParams
+
+    raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0))
+    assert raw.parents.tolist() == pulled.parents.tolist()
+    leaf = np.setdiff1d(np.arange(raw.num_joints), raw.parents)
+    inner = np.setdiff1d(np.arange(raw.num_joints), leaf)
+    np.testing.assert_allclose(pulled.positions[inner], raw.positions[inner])
+    expected = raw.positions[leaf] + 0.35 * (raw.positions[raw.parents[leaf]] - raw.positions[leaf])
+    np.testing.assert_allclose(pulled.positions[leaf], expected, atol=1e-9)

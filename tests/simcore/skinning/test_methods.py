@@ -95,3 +95,19 @@ def test_rejects_bad_input(bent_tube) -> None:
     with pytest.raises(InvalidInput) as err:
         compute_weights(v, f, skeleton, method="magic")  # type: ignore[arg-type]
     assert err.value.field == "skinning"
+
+
+@pytest.mark.parametrize("method", ["geodesic", "heat"])
+def test_floating_part_and_single_joint_still_get_weights(bent_tube, method: str) -> None:
+    """A detached sphere far from every bone (an accessory) is weighted too; a one-joint skeleton works."""
+    v, f, skeleton = bent_tube
+    ball = trimesh.creation.icosphere(subdivisions=2, radius=0.2)
+    ball.apply_translation([3.0, 0.0, 0.0])
+    verts = np.vstack([v, ball.vertices])
+    faces = np.vstack([f, ball.faces + len(v)])
+    result = compute_weights(verts, faces, skeleton, method=method, max_influences=8)
+    assert weight_stats(result.weights)["unweighted_vertices"] == 0
+    np.testing.assert_allclose(np.asarray(result.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
+    lone = Skeleton(np.zeros((1, 3)), np.array([-1]), ["root"])
+    single = compute_weights(v, f, lone, method=method).weights.toarray()
+    np.testing.assert_allclose(single, 1.0)

@@ -14,7 +14,7 @@ export type JobOptions = Schemas["JobOptions"];
 export type Problem = { type?: string; title?: string; status: number; detail: string; code: string; field?: string | null;
   errors?: { field: string; message: string }[] };
 
-type DeepPartial<T> = { [K in keyof T]?: T[K] extends object ? (T[K] extends unknown[] ? T[K] : DeepPartial<T[K]>) : T[K] };
+type DeepPartial<T> = { [K in keyof T]?: NonNullable<T[K]> extends unknown[] ? T[K] : NonNullable<T[K]> extends object ? DeepPartial<NonNullable<T[K]>> : T[K] };
 /** What the new-job form sends: any subset of JobOptions (the server fills in defaults). */
 export type JobOptionsInput = DeepPartial<JobOptions>;
 

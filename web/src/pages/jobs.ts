@@ -5,25 +5,28 @@ import { h, replace } from "../ui/dom";
 import { bytes, dateTime, duration } from "../ui/format";
 import { errorLine, progressBar, stageText, statusBadge } from "../ui/job_bits";
 
-const PAGE_SIZE = 20;
+const PAGE_SIZES = [10, 20, 50];
 const MAX_STREAMS = 3;  // leave the browser's per-host connections for everything else
 const STATUSES: (JobStatus | "")[] = ["", "queued", "running", "succeeded", "failed", "canceled"];
 
 export function jobsPage(root: HTMLElement): () => void {
-  const params = new URLSearchParams(location.hash.split("?")[1] ?? "");
-  let status = (params.get("status") ?? "") as JobStatus | "";
+  let status: JobStatus | "" = "";
   const cursors: (string | null)[] = [null];  // cursor of each page visited; the last is the current page
   const watchers = new Map<string, () => void>();
   let refreshTimer: number | undefined;
+  let latest = 0;  // only the newest request may render (filter changes can overlap)
 
   const filter = h("select", { id: "status-filter", onchange: () => { status = filter.value as JobStatus | ""; cursors.length = 1; load(); } },
     ...STATUSES.map((s) => h("option", { value: s, selected: s === status }, s || "all")));
+  const size = h("select", { id: "page-size", onchange: () => { cursors.length = 1; load(); } },
+    ...PAGE_SIZES.map((n) => h("option", { value: String(n), selected: n === 20 }, String(n))));
   const body = h("div", { "aria-live": "polite" });
   const pager = h("div", { class: "row", style: "margin-top:10px" });
   replace(root,
     h("div", { class: "row", style: "justify-content:space-between" },
       h("h1", {}, "Jobs"),
-      h("div", { class: "row" }, h("label", { for: "status-filter" }, "Status"), filter, h("a", { class: "button primary", href: "#/new" }, "New job"))),
+      h("div", { class: "row" }, h("label", { for: "status-filter" }, "Status"), filter,
+        h("label", { for: "page-size" }, "Per page"), size, h("a", { class: "button primary", href: "#/new" }, "New job"))),
     body, pager);
 
   function stopWatchers(): void {
@@ -51,10 +54,13 @@ export function jobsPage(root: HTMLElement): () => void {
     stopWatchers();
     window.clearTimeout(refreshTimer);
     const cursor = cursors[cursors.length - 1];
+    const mine = ++latest;
     let page;
     try {
-      page = await api.listJobs({ status: status || undefined, limit: PAGE_SIZE, cursor: cursor ?? undefined });
+      page = await api.listJobs({ status: status || undefined, limit: Number(size.value), cursor: cursor ?? undefined });
+      if (mine !== latest) return;
     } catch (e) {
+      if (mine !== latest) return;
       replace(body, h("div", { class: "errorbox" }, e instanceof ApiError ? `${e.code}: ${e.message}` : String(e)));
       return;
     }

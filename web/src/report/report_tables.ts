@@ -43,11 +43,11 @@ function skinning(report: Report): HTMLElement | null {
   if (isObj(sk.scores)) {
     const methods = Object.entries(sk.scores).filter(([, v]) => isObj(v)) as [string, Obj][];
     const metrics = [...new Set(methods.flatMap(([, v]) => Object.keys(v)))];
-    parts.push(h("table", { id: "skinning-scores" },
+    parts.push(h("div", { class: "scroll" }, h("table", { id: "skinning-scores" },
       h("caption", { class: "muted", style: "text-align:left" }, "quality scores per method (lower strain is better; the chosen method is highlighted)"),
       h("thead", {}, h("tr", {}, h("th", {}, "method"), ...metrics.map((m) => h("th", { class: "num" }, label(m))))),
       h("tbody", {}, ...methods.map(([name, s]) => h("tr", { class: name === sk.method ? "best" : "" },
-        h("td", {}, name), ...metrics.map((m) => h("td", { class: "num" }, value(s[m]))))))));
+        h("td", {}, name), ...metrics.map((m) => h("td", { class: "num" }, value(s[m])))))))));
   }
   if (isObj(sk.weights)) parts.push(kvTable(sk.weights, "weights"));
   return section("skinning", "Skinning", ...parts);

@@ -58,6 +58,7 @@ export class SceneView {
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.enableDamping = false;  // render on demand: no coasting frames
     this.controls.addEventListener("change", () => this.invalidate());
+    this.controls.listenToKeyEvents(canvas);  // arrow keys pan when the canvas has focus
     this.resize = new ResizeObserver(() => this.fit());
     this.resize.observe(canvas.parentElement!);
     this.fit();
@@ -109,20 +110,31 @@ export class SceneView {
   show(models: LoadedModel[]): void {
     for (const m of this.models) { this.scene.remove(m.root); if (m.overlay) { this.scene.remove(m.overlay.group); m.overlay.dispose(); } }
     this.models = models;
-    // Lay the models out along +X with a gap, centred on the origin.
+    // View the creature from the side of its long horizontal axis (a profile for quadrupeds, the front for
+    // humanoids), slightly from above and turned; several models line up along that axis, left to right on screen.
     const boxes = models.map((m) => { m.root.position.set(0, 0, 0); m.root.updateMatrixWorld(true); return new THREE.Box3().setFromObject(m.root); });
-    const gap = 0.25 * Math.max(...boxes.map((b) => b.max.x - b.min.x));
+    const first = boxes[0].getSize(new THREE.Vector3());
+    const along: "x" | "z" = first.x >= first.z ? "x" : "z";
+    const viewDir = along === "x" ? new THREE.Vector3(0.3, 0.4, 1) : new THREE.Vector3(1, 0.4, -0.3);
+    viewDir.normalize();
+    const right = viewDir.clone().negate().cross(new THREE.Vector3(0, 1, 0));
+    const sign = Math.sign(right[along]) || 1;
+    const extent = (b: THREE.Box3) => b.max[along] - b.min[along];
+    const gap = 0.2 * Math.max(...boxes.map(extent));
     let cursor = 0;
-    models.forEach((m, i) => { m.root.position.x = cursor - boxes[i].min.x; cursor += boxes[i].max.x - boxes[i].min.x + gap; });
+    models.forEach((m, i) => {
+      m.root.position[along] = sign * (cursor + extent(boxes[i]) / 2) - (boxes[i].min[along] + boxes[i].max[along]) / 2;
+      cursor += extent(boxes[i]) + gap;
+    });
     const box = new THREE.Box3();
     for (const m of models) {
-      m.root.position.x -= (cursor - gap) / 2;
+      m.root.position[along] -= sign * (cursor - gap) / 2;
       this.scene.add(m.root);
       m.root.updateMatrixWorld(true);
       box.union(new THREE.Box3().setFromObject(m.root));
     }
     const size = box.getSize(new THREE.Vector3()), center = box.getCenter(new THREE.Vector3());
-    const radius = Math.max(size.length() / 2, 1e-3);
+    const radius = Math.max(first.length() / 2, 1e-3);
     for (const m of models) {
       if (m.bones.length) {
         m.overlay = new SkeletonOverlay(m.bones, radius * 0.018);
@@ -131,9 +143,12 @@ export class SceneView {
     }
     this.grid.scale.setScalar(Math.max(size.x, size.z, 0.5) * 0.6);
     this.grid.position.set(center.x, box.min.y, center.z);
-    const dist = radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2)) * 1.05;
+    // Fit the box (not its bounding sphere, which is loose for long creatures) in both screen directions.
+    const half = Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2));
+    const width = size[along], depth = along === "x" ? size.z : size.x;
+    const dist = 1.2 * Math.max(size.y / 2 / half, width / 2 / (half * this.camera.aspect)) + depth / 2;
     this.camera.near = dist / 100; this.camera.far = dist * 100;
-    this.camera.position.copy(center).add(new THREE.Vector3(0.55, 0.35, 1).normalize().multiplyScalar(dist));
+    this.camera.position.copy(center).add(viewDir.multiplyScalar(dist));
     this.camera.updateProjectionMatrix();
     this.controls.target.copy(center);
     this.controls.update();

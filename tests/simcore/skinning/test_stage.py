@@ -1,0 +1,45 @@
+"""Pipeline stage `skin`: state.weights, report["skinning"], progress."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from simcore.errors import InvalidInput
+from simcore.geometry.capsule_creatures import quadruped
+from simcore.geometry.mesh import IngestedMesh
+from simcore.options import JobOptions
+from simcore.pipeline import PipelineInputs, PipelineState, StageProgress, _stages
+from simcore.skinning import stage
+
+
+def test_skin_stage_sets_weights_and_reports_scores(tmp_path: Path) -> None:
+    vertices, faces, skeleton = quadruped()
+    state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"), JobOptions(skinning="auto", max_influences=4), tmp_path)
+    state.mesh = IngestedMesh(vertices, faces, b"")
+    state.skeleton = skeleton
+    seen: list[float] = []
+    stage.run(state, StageProgress("skin", 0.4, 0.2, lambda name, f: seen.append(f), lambda: None))
+    assert state.weights.shape == (len(vertices), skeleton.num_joints)
+    np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
+    report = state.report["skinning"]
+    assert report["method"] in {"geodesic", "heat"} and set(report["scores"]) == {"geodesic", "heat"}
+    assert report["weights"]["unweighted_vertices"] == 0 and report["weights"]["max_influences"] <= 4
+    assert {"omega_orth", "kappa_log", "h_spec", "strain_mean", "score"} <= set(report["scores"]["heat"])
+    assert seen[-1] == pytest.approx(0.6) and seen == sorted(seen)
+
+
+def test_skin_stage_needs_a_skeleton(tmp_path: Path) -> None:
+    vertices, faces, _ = quadruped()
+    state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"), JobOptions(), tmp_path)
+    state.mesh = IngestedMesh(vertices, faces, b"")
+    with pytest.raises(InvalidInput) as err:
+        stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
+    assert err.value.code == "missing_stage_input"
+
+
+def test_skin_runs_right_after_skeleton() -> None:
+    names = [name for name, _, _ in _stages()]
+    assert names.index("skin") == names.index("skeleton") + 1

@@ -1,0 +1,99 @@
+// Job detail: live status, artifacts, report tables and the 3D viewer (loaded on demand with three.js).
+import { ApiError, api, type Job } from "../api/client";
+import { isTerminal, watchJob } from "../api/job_watch";
+import { withKey } from "../api/session";
+import { reportTables, type Report } from "../report/report_tables";
+import { h, replace } from "../ui/dom";
+import { bytes, dateTime, duration } from "../ui/format";
+import { errorLine, progressBar, stageText, statusBadge } from "../ui/job_bits";
+
+function numbers(v: unknown): number[] | null {
+  return Array.isArray(v) && v.length > 1 && v.every((x) => typeof x === "number") ? v : null;
+}
+
+export function jobDetailPage(root: HTMLElement, id: string): () => void {
+  const head = h("div", { id: "job-head" });
+  const facts = h("div", {});
+  const viewerHost = h("section", { id: "viewer", "aria-label": "3D viewer" });
+  const artifactsHost = h("section", { id: "artifacts" });
+  const reportHost = h("section", { id: "report" });
+  replace(root, h("p", {}, h("a", { href: "#/jobs" }, "← Jobs")), head, facts, viewerHost, artifactsHost, reportHost);
+  let stopWatch: (() => void) | null = null;
+  let disposeViewer: (() => void) | null = null;
+  let closed = false;
+  let finished = false;
+
+  function renderHead(job: Job): void {
+    const cancel = !isTerminal(job) ? h("button", { class: "danger", id: "cancel-job", onclick: async () => {
+      try { renderHead(await api.cancelJob(job.id)); } catch (e) { if (e instanceof ApiError) alert(e.message); }
+    } }, "Cancel job") : null;
+    replace(head,
+      h("div", { class: "row" }, h("h1", { style: "margin:0" }, job.mesh.filename), statusBadge(job), cancel),
+      h("div", { class: "row", style: "margin:10px 0" }, h("div", { style: "width:320px" }, progressBar(job)),
+        h("span", { class: "stage", id: "job-stage" }, stageText(job))),
+      job.error ? h("div", { class: "errorbox", id: "job-error" }, h("strong", {}, "Failed: "), errorLine(job)) : null);
+    replace(facts, h("dl", { class: "kv panel" },
+      h("dt", {}, "Job id"), h("dd", {}, h("code", {}, job.id)),
+      h("dt", {}, "Created"), h("dd", {}, dateTime(job.created_at)),
+      h("dt", {}, "Ran"), h("dd", {}, job.started_at ? `${dateTime(job.started_at)} · ${duration(job.started_at, job.finished_at)}${job.attempts > 1 ? ` · attempt ${job.attempts}` : ""}` : "not started"),
+      h("dt", {}, "Mesh"), h("dd", {}, `${job.mesh.filename} (${job.mesh.format}, ${bytes(job.mesh.size)})`),
+      h("dt", {}, "Motion"), h("dd", {}, job.motion ? `${job.motion.filename} (${job.motion.format}, ${bytes(job.motion.size)})` : "none"),
+      h("dt", {}, "Options"), h("dd", {}, h("details", {}, h("summary", {}, "JSON"), h("pre", {}, JSON.stringify(job.options, null, 2))))));
+  }
+
+  function renderArtifacts(job: Job): void {
+    if (!job.artifacts.length) {
+      replace(artifactsHost, h("h2", {}, "Artifacts"), h("p", { class: "panel empty" }, isTerminal(job) ? "This job produced no files." : "Files appear here when the job finishes."));
+      return;
+    }
+    replace(artifactsHost, h("h2", {}, "Artifacts"), h("table", { id: "artifacts-table" },
+      h("thead", {}, h("tr", {}, h("th", {}, "File"), h("th", {}, "Type"), h("th", { class: "num" }, "Size"), h("th", {}, "SHA-256"), h("th", {}))),
+      h("tbody", {}, ...job.artifacts.map((a) => h("tr", {},
+        h("td", {}, a.name), h("td", { class: "muted" }, a.media_type), h("td", { class: "num" }, bytes(a.size)),
+        h("td", {}, h("code", { title: a.sha256 }, `${a.sha256.slice(0, 12)}…`)),
+        h("td", {}, h("a", { href: withKey(a.url), download: a.name, "aria-label": `Download ${a.name}` }, "Download")))))));
+  }
+
+  async function renderResults(job: Job): Promise<void> {
+    renderArtifacts(job);
+    const reportArtifact = job.artifacts.find((a) => a.name === "report.json");
+    let report: Report | null = null;
+    if (reportArtifact) {
+      try {
+        report = (await api.artifactJson(reportArtifact.url)) as Report;
+        replace(reportHost, h("h2", {}, "Report"), reportTables(report));
+      } catch (e) {
+        replace(reportHost, h("h2", {}, "Report"), h("div", { class: "errorbox" }, `report.json could not be read: ${e instanceof Error ? e.message : e}`));
+      }
+    }
+    if (closed || !job.artifacts.some((a) => a.name.endsWith(".glb"))) return;
+    replace(viewerHost, h("h2", {}, "Viewer"), h("p", { class: "muted" }, "loading the viewer…"));
+    const { mountViewer } = await import("../viewer/viewer_panel");
+    if (closed) return;
+    const refine = report && typeof report.refine === "object" ? (report.refine as Record<string, unknown>) : null;
+    const lbs = numbers(refine?.volume_ratio_lbs), refined = numbers(refine?.volume_ratio_refined);
+    const host = h("div", {});
+    replace(viewerHost, h("h2", {}, "Viewer"), host);
+    disposeViewer = mountViewer(host, { artifacts: job.artifacts, volume: lbs && refined ? { lbs, refined } : null });
+  }
+
+  function update(job: Job): void {
+    renderHead(job);
+    if (isTerminal(job) && !finished) {
+      finished = true;
+      renderResults(job);
+    } else if (!isTerminal(job)) {
+      renderArtifacts(job);
+    }
+  }
+
+  api.getJob(id).then((job) => {
+    if (closed) return;
+    update(job);
+    if (!isTerminal(job)) stopWatch = watchJob(id, update);
+  }).catch((e) => {
+    replace(head, h("h1", {}, "Job"), h("div", { class: "errorbox" }, e instanceof ApiError ? `${e.code}: ${e.message}` : String(e)));
+  });
+
+  return () => { closed = true; stopWatch?.(); disposeViewer?.(); };
+}
