@@ -4,7 +4,10 @@ A hand is cropped around the fitted wrist (vertices of faces inside a sphere ove
 resolution where fingers separate, thinned and pruned. Tips beyond the wrist are finger candidates; the
 thumb is the one that branches off closest to the wrist, the other four are ordered index → pinky by how far
 forward they are (palms down or in, the index is the front finger). Joints 1, 2, 3 sit along each finger's
-branch (knuckle, then fractions of the knuckle → tip length measured on Mixamo hands).
+branch (knuckle, then fractions of the knuckle → tip length measured on Mixamo hands). Exactly five tips must
+stand out (a sixth long one means surface noise or a mitten's folds). When fingers touch so closely that
+they share voxels, `finger_template` checks the mesh's cross-sections for separate finger shells and lays the
+joints out from the Mixamo hand template instead (report: "fallback", "template").
 """
 
 from __future__ import annotations
@@ -13,8 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from simcore.geometry.voxelize import solid_voxels
+from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.geometric import rank_bodies
+from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.finger_template import template_fingers
@@ -42,12 +46,11 @@ def _hand_crop(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray,
     return vertices[used], remap[faces[keep]]
 
 
-def _one_hand(sub_v: np.ndarray, sub_f: np.ndarray, wrist: np.ndarray, elbow: np.ndarray,
+def _one_hand(grid: VoxelGrid, sub_v: np.ndarray, wrist: np.ndarray, elbow: np.ndarray,
               forward: np.ndarray) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
-    """Fingers from the medial tree of the hand crop (sub_v (V, 3), sub_f (F, 3)), or None with a reason."""
+    """Fingers from the medial tree of the hand crop's solid `grid` (crop vertices sub_v (V, 3)), or None."""
     forearm = float(np.linalg.norm(wrist - elbow))
     d = (wrist - elbow) / max(forearm, 1e-12)
-    grid = solid_voxels(sub_v, sub_f, resolution=HAND_RESOLUTION)
     forest = medial_forest(grid)
     ranked, _, _ = rank_bodies(grid, forest)
     scale = float(np.ptp(sub_v, axis=0).max())
@@ -104,11 +107,15 @@ def fit_fingers(vertices: np.ndarray, faces: np.ndarray, body: dict[str, np.ndar
             report[side.lower()] = {"reason": "too few triangles around the hand"}
             report["separable"] = False
             return None, report
-        fingers, info = _one_hand(crop[0], crop[1], wrist, elbow, forward)
+        grid = solid_voxels(crop[0], crop[1], resolution=HAND_RESOLUTION)
+        fingers, info = _one_hand(grid, crop[0], wrist, elbow, forward)
         if fingers is None:  # touching fingers: the mesh's sections can still show them
             fingers, template_info = template_fingers(crop[0], crop[1], wrist, elbow, forward, side)
             info = {**info, "fallback": template_info}
-            template_used |= fingers is not None
+            if fingers is not None:  # the template knows proportions, not this hand's surface
+                names = list(fingers)
+                fingers = dict(zip(names, snap_inside(grid, np.array([fingers[n] for n in names]))))
+                template_used = True
         report[side.lower()] = info
         if fingers is None:
             report["separable"] = False

@@ -8,7 +8,8 @@ is up × forward (Mixamo: facing +Z with +Y up puts the left hand at +X).
 
 Joint placement follows the medial paths, with proportions measured on Mixamo characters (fractions along
 the spine between Hips and Neck, along the arm from shoulder to fingertip, knee halfway between hip and
-ankle, ankle at the foot's corner). Joints that land outside the solid are moved to the nearest inside voxel.
+ankle, ankle at the foot's corner). Long medial branches the template leaves out (wings, tails) become SPRING
+chains (`extra_limbs`). Joints that land outside the solid are moved to the nearest inside voxel.
 """
 
 from __future__ import annotations
@@ -17,11 +18,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from simcore.errors import InvalidInput
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.geometric import rank_bodies
+from simcore.skeleton.extra_limbs import extra_limbs
+from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.hands import fit_fingers
 from simcore.skeleton.medial import medial_forest
@@ -40,6 +42,7 @@ ARM_FRACTIONS = {"ForeArm": 0.35, "Hand": 0.71}  # of shoulder joint → fingert
 SHOULDER_REACH = 2.0  # shoulder joint: this many chest radii out along the arm from the spine
 HIPS_ABOVE_CROTCH = 0.01  # × height: Hips sits just above where the leg branches meet
 FUSED_CROTCH = 0.4  # a leg split below this share of the height means the thighs are fused in the voxels
+NECK_AT, HEAD_AT = 0.17, 0.35  # of shoulder line → head top (mean of Mixamo Xbot and Soldier)
 TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (0.575 on Mixamo's Xbot and Soldier)
 
 
@@ -224,18 +227,6 @@ def _facing(tree: _Tree, biped: _Biped, leg_paths: list[list[int]], lateral: np.
     return (side_normal if total >= 0 else -side_normal), abs(total) / reach
 
 
-def _snap_inside(grid: VoxelGrid, points: np.ndarray) -> np.ndarray:
-    """Move points outside the solid to the centre of the nearest occupied voxel."""
-    out = points.copy()
-    outside = ~grid.inside(points)
-    if outside.any():
-        _, idx = ndimage.distance_transform_edt(~grid.occupancy, return_indices=True)
-        ijk = np.clip(grid.index_of(points[outside]), 0, np.asarray(grid.occupancy.shape) - 1)
-        nearest = idx[:, ijk[:, 0], ijk[:, 1], ijk[:, 2]].T
-        out[outside] = grid.centers(nearest)
-    return out
-
-
 def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarray) -> dict[str, np.ndarray]:
     up, floor, height = biped.up, biped.floor, biped.height
     j: dict[str, np.ndarray] = {}
@@ -268,8 +259,8 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
     if pelvis_h - floor < FUSED_CROTCH * height:  # thighs touch in the solid: the medial split is near the knees
         hips_h = floor + TYPICAL_HIPS * height
     j["Hips"] = _at_height(spine, up, hips_h)
-    j["Neck"] = _at_height(spine, up, shoulder_h + 0.2 * (top - shoulder_h))
-    j["Head"] = _at_height(spine, up, shoulder_h + 0.45 * (top - shoulder_h))
+    j["Neck"] = _at_height(spine, up, shoulder_h + NECK_AT * (top - shoulder_h))
+    j["Head"] = _at_height(spine, up, shoulder_h + HEAD_AT * (top - shoulder_h))
     hips_up, neck_up = float(j["Hips"] @ up), float(j["Neck"] @ up)
     for name, frac in SPINE_FRACTIONS.items():
         j[name] = _at_height(spine, up, hips_up + frac * (neck_up - hips_up))
@@ -369,8 +360,24 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
             positions.append(fingers[n])
             kinds.append(JointKind.HAND)
             parents.append(names.index(HAND_PARENTS[n]))
-    pos = _snap_inside(grid, np.asarray(positions))
-    skeleton = Skeleton(pos, np.asarray(parents), [full_name(n) for n in names], kinds).validate()
+    names = [full_name(n) for n in names]
+    scale = float(np.ptp(v, axis=0).max())
+    extras = extra_limbs(tree.pos, tree.radius, tree.adjacency, tree.nodes, biped.parent,
+                         [biped.head, *biped.feet, *biped.hands], np.asarray(positions), biped.height, scale)
+    added = 0
+    for k, chain in enumerate(extras, start=1):
+        if len(positions) + len(chain.positions) > max_joints:
+            break
+        first = len(positions)
+        for i, p in enumerate(chain.positions):
+            names.append(f"extra{k:02d}_{i + 1:02d}")
+            positions.append(p)
+            kinds.append(JointKind.SPRING)
+            parents.append(chain.parent if i == 0 else first + i - 1)
+        added += 1
+    report["extra_limbs"] = added
+    pos = snap_inside(grid, np.asarray(positions))
+    skeleton = Skeleton(pos, np.asarray(parents), names, kinds).validate()
     report.update(detected=True, facing=_facing_label(forward), facing_vector=np.round(forward, 4).tolist(),
                   facing_confidence=round(facing_conf, 3), joints=skeleton.num_joints)
     return HumanoidFit(skeleton, report)

@@ -21,14 +21,23 @@ from tests.e2e.conftest import ARTIFACTS
 pytestmark = pytest.mark.browser
 JOB_TIMEOUT_MS = 240_000
 
-# Record every value the progress bars show (the page re-renders them), so the test can check the sequence.
-RECORD_PROGRESS = """(sel) => {
-  window.__progress = [];
-  const read = () => { const el = document.querySelector(sel); if (el) { const v = Number(el.getAttribute('aria-valuenow'));
-    if (window.__progress[window.__progress.length - 1] !== v) window.__progress.push(v); } };
-  new MutationObserver(read).observe(document.body, { subtree: true, childList: true, attributes: true, attributeFilter: ['aria-valuenow', 'style'] });
+# Record every value an element shows (the page re-renders it), so the test can check the sequence.
+RECORD = """([sel, name, attr]) => {
+  window[name] = [];
+  const read = () => { const el = document.querySelector(sel); if (!el) return;
+    const v = attr ? Number(el.getAttribute(attr)) : el.textContent; const seen = window[name];
+    if (seen[seen.length - 1] !== v) seen.push(v); };
+  new MutationObserver(read).observe(document.body, { subtree: true, childList: true, characterData: true, attributes: true });
   read();
 }"""
+
+
+def record_progress(page, selector: str, name: str = "__progress") -> None:
+    page.evaluate(RECORD, [selector, name, "aria-valuenow"])
+
+
+def record_text(page, selector: str, name: str) -> None:
+    page.evaluate(RECORD, [selector, name, None])
 
 
 def canvas_pixels(page, name: str) -> np.ndarray:
@@ -84,7 +93,7 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
     page.screenshot(path=str(ARTIFACTS / "01-signed-in.png"))
 
     page.goto("/#/jobs")
-    page.wait_for_selector("text=No jobs yet")
+    page.wait_for_selector("#jobs-table, .empty")  # "No jobs yet" on a fresh server
     first_load = page_weight_and_tti(page)
 
     page.click("a[href='#/new']")
@@ -92,13 +101,13 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
     page.wait_for_selector("label[for=mesh] >> text=fox.glb")
     page.select_option("#opt-max-influences", "4")
     page.screenshot(path=str(ARTIFACTS / "02-new-job.png"), full_page=True)
-    page.evaluate(RECORD_PROGRESS, "[aria-label='upload progress']")
+    record_progress(page, "[aria-label='upload progress']")
     page.click("#submit-job")
     page.wait_for_url(re.compile(r"#/jobs/[0-9a-f-]{36}$"))
     upload_progress = page.evaluate("window.__progress")
     assert upload_progress[-1] == 100, upload_progress  # XHR upload events drove the bar to the end
 
-    page.evaluate(RECORD_PROGRESS, "#job-head [role=progressbar]")
+    record_progress(page, "#job-head [role=progressbar]")
     page.wait_for_selector("#job-head .badge[data-status=succeeded], #job-head .badge[data-status=failed]", timeout=JOB_TIMEOUT_MS)
     job_progress = page.evaluate("window.__progress")
     status = page.get_attribute("#job-head .badge", "data-status")
@@ -204,6 +213,14 @@ def test_keys_page_creates_and_revokes_a_key(page, dashboard_server):
     r = page.request.get("/api/v1/keys/me", headers={"Authorization": f"Bearer {secret}"})
     assert r.status == 401
 
+    page.fill("#api-key", secret)  # a revoked key is refused with the server's message
+    page.click("#signin-form button[type=submit]")
+    assert "unauthorized" in page.wait_for_selector("#signin-message .error").inner_text()
+    page.click("#sign-out")
+    page.goto("/#/jobs")
+    page.wait_for_url(re.compile(r"#/keys$"))
+    assert page.inner_text("#who") == "not signed in"
+
 
 def test_animation_playback_and_lbs_vs_physics_side_by_side(page, dashboard_server, dev_assets):
     sign_in(page, dashboard_server.local_key)
@@ -213,8 +230,22 @@ def test_animation_playback_and_lbs_vs_physics_side_by_side(page, dashboard_serv
     page.check("#opt-refine")
     page.click("#submit-job")
     page.wait_for_url(re.compile(r"#/jobs/[0-9a-f-]{36}$"))
-    page.wait_for_selector("#job-head .badge[data-status=succeeded], #job-head .badge[data-status=failed]", timeout=JOB_TIMEOUT_MS)
-    assert page.get_attribute("#job-head .badge", "data-status") == "succeeded", page.inner_text("#job-head")
+    job_id = page.url.rsplit("/", 1)[-1]
+
+    # follow it from the jobs list: the row's bar and stage name update live
+    page.click("header a[href='#/jobs']")
+    row = f"#jobs-table tr[data-job-id='{job_id}']"
+    page.wait_for_selector(row)
+    record_progress(page, f"{row} [role=progressbar]", "__row_progress")
+    record_text(page, f"{row} .stage", "__row_stages")
+    page.wait_for_selector(f"{row} .badge[data-status=succeeded], {row} .badge[data-status=failed]", timeout=JOB_TIMEOUT_MS)
+    row_progress, row_stages = page.evaluate("[window.__row_progress, window.__row_stages]")
+    assert page.get_attribute(f"{row} .badge", "data-status") == "succeeded", page.inner_text(row)
+    assert row_progress == sorted(row_progress) and row_progress[-1] == 100 and len(row_progress) >= 3, row_progress
+    assert any(s.startswith("refine") for s in row_stages), row_stages  # stage names shown while running
+    print("jobs list row:", row_progress, row_stages)
+
+    page.click(f"{row} a")
     page.wait_for_selector("#viewer-stage[data-state=ready]", timeout=60_000)
 
     assert page.input_value("#viewer-model") == "__compare__"  # both files exist: side by side by default
@@ -264,9 +295,10 @@ def test_jobs_list_filters_pages_and_explains_failures(page, dashboard_server, d
 
     sign_in(page, dashboard_server.local_key)
     page.goto("/#/jobs")
+    page.wait_for_selector("#jobs-table")
     page.select_option("#status-filter", "failed")
-    page.wait_for_selector(f"#jobs-table tr[data-job-id='{failing}']")
-    assert set(page.locator("#jobs-table .badge").all_inner_texts()) == {"failed"}
+    page.wait_for_function("() => [...document.querySelectorAll('#jobs-table .badge')].every((b) => b.dataset.status === 'failed')")
+    assert page.locator(f"#jobs-table tr[data-job-id='{failing}']").count() == 1
     error = page.inner_text(f"#jobs-table tr[data-job-id='{failing}'] .job-error")
     assert error.startswith("unknown_clip") and "no such clip" in error
     page.screenshot(path=str(ARTIFACTS / "13-jobs-failed-filter.png"))

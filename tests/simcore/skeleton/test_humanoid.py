@@ -65,3 +65,24 @@ def test_dev_mixamo_characters_get_joints_near_their_own(dev_assets, asset):
     for name in ("LeftHand", "RightHand", "LeftFoot", "RightFoot", "Neck", "LeftArm", "RightLeg"):
         err = np.linalg.norm(joint(prediction.skeleton, name) - truth[full_name(name)]) / scale
         assert err < 0.06, (name, err)
+
+
+def test_a_tail_becomes_a_spring_chain_under_the_template():
+    import trimesh
+
+    from simcore.geometry.capsule_creatures import capsule_between
+
+    vertices, faces, _ = stick_humanoid()
+    tail = capsule_between(np.array([0.0, 0.95, -0.1]), np.array([0.0, 0.7, -0.85]), 0.05)
+    mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), tail])
+    fit = fit_humanoid(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    assert fit.skeleton is not None, fit.report
+    skeleton = fit.skeleton.validate()
+    spring = [i for i, k in enumerate(skeleton.kinds) if k == JointKind.SPRING]
+    assert fit.report["extra_limbs"] == 1 and 2 <= len(spring) <= 8
+    assert (skeleton.positions[spring, 2] < -0.1).all()  # along the tail, behind the body's axis
+    assert skeleton.positions[spring, 2].min() < -0.6  # out to near the tail's end (-0.85, tip pulled in)
+    root = min(spring, key=lambda i: skeleton.parents[i] in spring)
+    assert skeleton.kinds[skeleton.parents[root]] == JointKind.BODY
+    plain = fit_humanoid(vertices, faces)
+    assert plain.report["extra_limbs"] == 0

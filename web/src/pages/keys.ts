@@ -16,14 +16,18 @@ function localKeyHelp(): HTMLElement {
 }
 
 export function keysPage(root: HTMLElement): void {
+  renderKeys(root, null);
+}
+
+function renderKeys(root: HTMLElement, message: Node | null): void {
   const input = h("input", { type: "password", id: "api-key", autocomplete: "off", spellcheck: false, placeholder: "rf_…", size: 48 });
-  const msg = h("div", { role: "alert", id: "signin-message" });
+  const msg = h("div", { role: "alert", id: "signin-message" }, message);
   const manage = h("section", { "aria-labelledby": "manage-title" });
 
   const signIn = h("form", { class: "panel", id: "signin-form" },
     h("div", { class: "row" }, h("label", { for: "api-key" }, "API key"), input,
       h("button", { type: "submit", class: "primary" }, "Sign in"),
-      getKey() ? h("button", { type: "button", onclick: () => { clearKey(); refreshWho(); keysPage(root); } }, "Sign out") : null),
+      getKey() ? h("button", { type: "button", id: "sign-out", onclick: () => { clearKey(); refreshWho(); renderKeys(root, null); } }, "Sign out") : null),
     msg);
   signIn.addEventListener("submit", async (e) => {
     e.preventDefault();
@@ -32,10 +36,8 @@ export function keysPage(root: HTMLElement): void {
     try {
       const me = await api.whoami(secret);
       setKey(secret);
-      input.value = "";
       await refreshWho();
-      replace(msg, h("p", {}, `Signed in as ${me.name}. `, h("a", { href: "#/jobs" }, "Go to your jobs →")));
-      renderManage();
+      renderKeys(root, h("p", {}, `Signed in as ${me.name}. `, h("a", { href: "#/jobs" }, "Go to your jobs →")));
     } catch (err) {
       replace(msg, h("p", { class: "error" }, err instanceof ApiError ? `${err.code}: ${err.message}` : String(err)));
     }
@@ -87,5 +89,5 @@ export function keysPage(root: HTMLElement): void {
 
   replace(root, h("h1", {}, "API keys"), signIn, localKeyHelp(), manage);
   renderManage();
-  input.focus();
+  if (!message) input.focus();
 }

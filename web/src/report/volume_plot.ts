@@ -17,7 +17,7 @@ export function volumePlot(lbs: number[], refined: number[]): VolumePlot {
     points: vals.map((v, i) => `${x(i).toFixed(1)},${y((v - 1) * 100).toFixed(1)}`).join(" ") });
   const cursor = svg("line", { x1: PAD.l, x2: PAD.l, y1: PAD.t, y2: H - PAD.b, stroke: "#888", "stroke-dasharray": "3 3" });
   const ticks = [...new Set([lo, 0, hi])].map((v) => svg("text", { x: PAD.l - 6, y: y(v) + 4, "text-anchor": "end" }, `${v.toFixed(1)}%`));
-  const el = svg("svg", { class: "plot", id: "volume-plot", viewBox: `0 0 ${W} ${H}`, width: W, height: H, role: "img",
+  const el = svg("svg", { class: "plot", id: "volume-plot", viewBox: `0 0 ${W} ${H}`, style: `width:100%;max-width:${W * 1.4}px;height:auto`, role: "img",
     "aria-label": "volume change per frame, LBS and physics-refined" },
   svg("title", {}, "Volume change relative to the rest pose, per frame"),
   svg("line", { x1: PAD.l, x2: W - PAD.r, y1: y(0), y2: y(0), stroke: "#ccc" }),

@@ -115,7 +115,8 @@ export class SceneView {
     const boxes = models.map((m) => { m.root.position.set(0, 0, 0); m.root.updateMatrixWorld(true); return new THREE.Box3().setFromObject(m.root); });
     const first = boxes[0].getSize(new THREE.Vector3());
     const along: "x" | "z" = first.x >= first.z ? "x" : "z";
-    const viewDir = along === "x" ? new THREE.Vector3(0.3, 0.4, 1) : new THREE.Vector3(1, 0.4, -0.3);
+    const yaw = models.length > 1 ? 0.1 : 0.3;  // nearly square-on when comparing, so both models show at one scale
+    const viewDir = along === "x" ? new THREE.Vector3(yaw, 0.4, 1) : new THREE.Vector3(1, 0.4, -yaw);
     viewDir.normalize();
     const right = viewDir.clone().negate().cross(new THREE.Vector3(0, 1, 0));
     const sign = Math.sign(right[along]) || 1;
@@ -217,9 +218,11 @@ export class SceneView {
         if (this.colorMode === "texture" || !skinned) { this.restore(mesh); continue; }
         if (!this.originals.has(mesh)) this.originals.set(mesh, { material: mesh.material, color: mesh.geometry.getAttribute("color") });
         const bones = skinned.skeleton.bones;
+        // Colours follow bone names, so LBS and physics models side by side agree.
+        const palette = bones.map((b) => boneColor(Math.max(names.indexOf(b.name), 0)));
         const colors = this.colorMode === "weights"
           ? heatColors(mesh.geometry, bones.findIndex((b) => b.name === this.selectedBone))
-          : dominantColors(mesh.geometry, (i) => boneColor(Math.max(names.indexOf(bones[i]?.name ?? ""), 0)));
+          : dominantColors(mesh.geometry, (i) => palette[i] ?? palette[0]);
         mesh.geometry.setAttribute("color", new THREE.BufferAttribute(colors, 3));
         mesh.material = this.vertexMaterial;
       }
@@ -275,5 +278,6 @@ export class SceneView {
     this.resize.disconnect();
     this.controls.dispose();
     this.renderer.dispose();
+    this.renderer.forceContextLoss();  // browsers cap live WebGL contexts; free ours when the page closes
   }
 }
