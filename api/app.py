@@ -6,6 +6,7 @@ import tempfile
 from pathlib import Path
 
 from fastapi import FastAPI
+from fastapi.middleware.gzip import GZipMiddleware
 from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
 
@@ -37,6 +38,7 @@ def create_app() -> FastAPI:
     app.include_router(health.router)
     app.include_router(jobs_router)
     app.include_router(keys_router)
+    app.add_middleware(GZipMiddleware, minimum_size=1024)  # the viewer bundle is ~660 KB raw, ~170 KB gzipped; SSE is excluded
     app.add_middleware(UploadLimit, max_bytes=2 * settings.max_upload_bytes + BODY_SLACK_BYTES)
     dist = WEB_DIR / "dist"
     if dist.is_dir():

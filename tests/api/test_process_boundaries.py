@@ -19,3 +19,8 @@ def test_declared_oversized_body_is_refused_up_front(client, auth):
     r = client.post("/api/v1/jobs", headers={**auth, "Content-Length": str(50 * 1024 * 1024), "Content-Type": "multipart/form-data; boundary=x"},
                     content=b"--x--\r\n")
     assert r.status_code == 413 and r.json()["code"] == "upload_too_large"
+
+
+def test_large_json_responses_are_gzipped_when_asked(client, auth):
+    r = client.get("/openapi.json", headers={"Accept-Encoding": "gzip"})
+    assert r.status_code == 200 and r.headers.get("content-encoding") == "gzip"
