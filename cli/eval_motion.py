@@ -5,11 +5,11 @@ Registered in cli/main.py as `eval_app.command("motion")(eval_motion.eval_motion
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
+from cli.eval_output import print_table_and_problems, write_report_json
 from rich.console import Console
 from rich.table import Table
 
@@ -39,13 +39,8 @@ def render(report: MotionEvaluation, console: Console) -> None:
         table.add_row("MEAN", "", target, "", "", "", "", "", _fmt(report.mean(target, "vertex_error"), 4),
                       _fmt(report.mean(target, "vertex_error_p95"), 4), _fmt(report.mean(target, "mocap_sliding"), 4),
                       "", "", style="bold")
-    console.print(table)
+    print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.target}: {r.error}" for r in report.rows if r.error))
     console.print(f"predictor: {report.predictor}")
-    for name, reason in report.skipped.items():
-        console.print(f"skipped {name}: {reason}")
-    for r in report.rows:
-        if r.error:
-            console.print(f"[red]{r.name} {r.target}: {r.error}[/red]")
 
 
 def eval_motion(
@@ -60,10 +55,7 @@ def eval_motion(
         report = evaluate_motion(directory, use_predicted=not artist_only, only=set(only) if only else None,
                                  on_asset=lambda n: status.update(f"retargeting {n}"))
     render(report, console)
-    if json_path is not None:
-        json_path.parent.mkdir(parents=True, exist_ok=True)
-        json_path.write_text(json.dumps(report.to_dict(), indent=1))
-        console.print(f"wrote {json_path}")
+    write_report_json(console, json_path, report.to_dict())
 
 
 if __name__ == "__main__":

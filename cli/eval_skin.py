@@ -7,11 +7,11 @@ parent is the default --peers.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
+from cli.eval_output import print_table_and_problems, write_report_json
 from rich.console import Console
 from rich.table import Table
 
@@ -56,12 +56,7 @@ def render(report: SkinEvaluation, console: Console) -> None:
     for title, subset in (("MEAN (all)", None), ("MEAN (four)", FOUR)):
         for m in report.methods():
             table.add_row(title, "", m, *_cells(report.mean(m, subset)), style="bold")
-    console.print(table)
-    for name, reason in report.skipped.items():
-        console.print(f"skipped {name}: {reason}")
-    for r in report.rows:
-        if r.error:
-            console.print(f"[red]{r.name} {r.method}: {r.error}[/red]")
+    print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.method}: {r.error}" for r in report.rows if r.error))
 
 
 def eval_skin(
@@ -77,10 +72,7 @@ def eval_skin(
     with console.status("skinning…") as status:
         report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, on_asset=lambda n: status.update(f"skinning {n}"))
     render(report, console)
-    if json_path is not None:
-        json_path.parent.mkdir(parents=True, exist_ok=True)
-        json_path.write_text(json.dumps(report.to_dict(), indent=1))
-        console.print(f"wrote {json_path}")
+    write_report_json(console, json_path, report.to_dict())
 
 
 if __name__ == "__main__":

@@ -120,7 +120,7 @@ def main() -> None:
     import numpy as np  # noqa: PLC0415
 
     sys.path.insert(0, str(HERE.parents[1]))
-    from simcore.evaluation.skin_eval import rigged_assets  # noqa: PLC0415
+    from simcore.evaluation.assets import rigged_assets  # noqa: PLC0415
     from simcore.geometry.weld import weld_vertices  # noqa: PLC0415
 
     python = ensure_venv()

@@ -16,7 +16,7 @@ onto the matched artist joints (W_ours · C, C one-hot J_ours × J_gt), so every
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,9 +24,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.errors import InvalidInput, SimcoreError
-from simcore.evaluation.skeleton_eval import read_categories
+from simcore.evaluation.assets import rigged_assets
 from simcore.io.gltf_document import GltfDocument
-from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
+from simcore.io.gltf_rig import RiggedAsset
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
 from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
@@ -86,23 +86,6 @@ class SkinEvaluation:
             "mean": {m: self.mean(m) for m in self.methods()},
             "skipped": self.skipped,
         }
-
-
-def rigged_assets(directory: Path, skipped: dict[str, str] | None = None) -> Iterator[tuple[str, str, GltfDocument, RiggedAsset]]:
-    """(name, category, document, rigged asset) for each readable skinned .glb/.gltf in `directory`, sorted."""
-    directory = Path(directory)
-    if not directory.is_dir():
-        raise InvalidInput(f"{directory} is not a directory", code="not_a_directory", field="dir")
-    categories = read_categories(directory)
-    for path in sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf")):
-        try:
-            doc = GltfDocument.from_bytes(path.read_bytes())
-            asset = read_rigged_asset(doc)
-        except SimcoreError as exc:
-            if skipped is not None:
-                skipped[path.stem] = f"{exc.code}: {exc}"
-            continue
-        yield path.stem, categories.get(path.stem, "unknown"), doc, asset
 
 
 def clip_skin_matrices(doc: GltfDocument, asset: RiggedAsset) -> np.ndarray | None:
