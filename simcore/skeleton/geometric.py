@@ -34,6 +34,10 @@ class GeometricParams:
     spacing: float = 0.12  # longest stretch of a branch without a joint
     min_part: float = 0.002  # bodies with less than this share of the solid's voxels get no joints
     tip_pull: float = 0.35  # leaf joints move this share towards their parent: rigs end where the end part starts
+    close_radius: int = 1  # voxel closing of the surface shell before filling
+    close_retry: int = 2  # a stronger closing tried on every mesh...
+    close_drop: float = 0.25  # ...and kept when it shortens the medial axis by more than this share
+    close_inside: float = 0.97  # ...with at least this share of it inside the lightly closed solid (no bridging)
     sheet_ratio: float = 0.02  # thinner than this × the length: a flat sheet, rigged as a principal-axis chain
 
 
@@ -185,6 +189,33 @@ def rank_bodies(grid: VoxelGrid, forest: MedialForest) -> tuple[list[int], dict[
     return ranked, comp_volume, body_labels
 
 
+def _closed_solid(v: np.ndarray, faces: np.ndarray, params: GeometricParams) -> tuple[VoxelGrid, MedialForest, int]:
+    """Voxelise with the smallest closing, then retry with a stronger one; keep the stronger closing only when it
+    shortens the medial axis by more than `close_drop` (a gap-sized hole made thinning trace round a cavity) and
+    its medial axis stays inside the lightly closed solid (the closing filled a hole in a body, not the space
+    between separate parts, e.g. BrainStem's rigid pieces, whose joints would then float outside the mesh).
+
+    Returns (grid, medial forest, close radius used). Unsupervised: no ground truth, one criterion for all meshes.
+    """
+    grid = solid_voxels(v, faces, resolution=params.resolution, close_radius=params.close_radius)
+    forest = medial_forest(grid)
+    if params.close_retry <= params.close_radius:
+        return grid, forest, params.close_radius
+    closed = solid_voxels(v, faces, resolution=params.resolution, close_radius=params.close_retry)
+    closed_forest = medial_forest(closed)
+    shorter = _medial_length(closed_forest) < (1.0 - params.close_drop) * _medial_length(forest)
+    if shorter and grid.inside(closed_forest.positions).mean() >= params.close_inside:
+        return closed, closed_forest, params.close_retry
+    return grid, forest, params.close_radius
+
+
+def _medial_length(forest: MedialForest) -> float:
+    """Total edge length of the medial forest, metres."""
+    a = np.repeat(np.arange(len(forest.adjacency)), [len(n) for n in forest.adjacency])
+    b = np.fromiter((m for n in forest.adjacency for m in n), dtype=np.int64, count=len(a))
+    return 0.5 * float(np.linalg.norm(forest.positions[a] - forest.positions[b], axis=1).sum())
+
+
 def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64,
                        params: GeometricParams = GeometricParams()) -> tuple[Skeleton, dict]:
     """Skeleton of a triangle soup by medial thinning.
@@ -200,8 +231,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         parents = np.arange(-1, len(chain) - 1, dtype=np.int64)
         skeleton = Skeleton(chain, parents, names, [JointKind.FREE] * len(chain)).validate()
         return skeleton, {"sheet": True, "joints": skeleton.num_joints, "bodies": 1}
-    grid = solid_voxels(v, faces, resolution=params.resolution)
-    base = medial_forest(grid)
+    grid, base, closing = _closed_solid(v, faces, params)
     ranked, comp_volume, body_labels = rank_bodies(grid, base)
     total = sum(comp_volume.values())
     kept = [c for c in ranked if comp_volume[c] >= params.min_part * total] or ranked[:1]
@@ -238,6 +268,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     skeleton = Skeleton(pos, parents, names, [JointKind.FREE] * len(order)).validate()
     report = {
         "resolution": params.resolution,
+        "close_radius": closing,
         "voxel_pitch": grid.pitch,
         "medial_voxels": int(len(forest.positions)),
         "spur_voxels_pruned": int(len(removed)),

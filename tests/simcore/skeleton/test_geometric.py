@@ -111,3 +111,39 @@ def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
     np.testing.assert_allclose(pulled.positions[inner], raw.positions[inner])
     expected = raw.positions[leaf] + 0.35 * (raw.positions[raw.parents[leaf]] - raw.positions[leaf])
     np.testing.assert_allclose(pulled.positions[leaf], expected, atol=1e-9)
+
+
+def _ring_round_a_slit(top: float, bottom: float) -> trimesh.Trimesh:
+    # Capsule bars of radius `top` and `bottom` round a 0.07 m (≈ 4 voxel) slit, joined at both ends, plus a tail.
+    gap = 0.07
+    upper, lower = top + gap / 2, -(bottom + gap / 2)
+    ends = [((0, upper), (1, upper), top), ((0, lower), (1, lower), bottom), ((0, upper), (0, lower), bottom),
+            ((1, upper), (1, lower), bottom), ((1, upper), (1.6, upper), 0.06)]
+    return trimesh.util.concatenate([capsule_between(np.array([*a, 0.0]), np.array([*b, 0.0]), r) for a, b, r in ends])
+
+
+def test_cavity_in_a_body_is_closed_so_the_skeleton_runs_through_the_body():
+    from simcore.skeleton.geometric import GeometricParams
+
+    # A thick head over a thin jaw loop (a fish head round its mouth): the closed axis runs through the head.
+    mesh = _ring_round_a_slit(top=0.14, bottom=0.05)
+    skeleton, report = geometric_skeleton(mesh.vertices, mesh.faces)
+    looped, looped_report = geometric_skeleton(mesh.vertices, mesh.faces, params=GeometricParams(close_retry=1))
+    assert report["close_radius"] == 2 and looped_report["close_radius"] == 1
+    assert looped.positions[:, 1].min() < -0.05  # without the retry, thinning traces round the jaw
+    assert skeleton.positions[:, 1].min() > 0.0  # with it, one chain through the head
+    assert skeleton.num_joints < looped.num_joints
+    assert solid_voxels(mesh.vertices, mesh.faces, resolution=report["resolution"]).inside(skeleton.positions).all()
+
+
+def test_gap_between_equal_parts_is_not_bridged():
+    # Two equal bars round a slit: closing would put the axis in the empty slit, outside the mesh.
+    mesh = _ring_round_a_slit(top=0.08, bottom=0.08)
+    skeleton, report = geometric_skeleton(mesh.vertices, mesh.faces)
+    assert report["close_radius"] == 1
+    assert solid_voxels(mesh.vertices, mesh.faces, resolution=report["resolution"]).inside(skeleton.positions).all()
+
+
+def test_meshes_without_cavities_keep_the_light_closing(dog):
+    _, _, _, _, report = dog
+    assert report["close_radius"] == 1
