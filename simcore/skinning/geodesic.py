@@ -40,30 +40,23 @@ CUTOFF = 1.5
 DISTANCE_UNIT = 0.003  # × the bounding box's longest side
 LEAF_EXTENSION = 1.0  # leaf joints carry real weight (heads, hands): their segment continues the parent bone
 _OFFSETS = np.array([o for o in itertools.product((-1, 0, 1), repeat=3) if o != (0, 0, 0)], dtype=np.int64)
-_HALF_OFFSETS = _OFFSETS[: len(_OFFSETS) // 2]  # one of each ± pair: undirected voxel edges once
 _CORNERS = np.array(list(itertools.product((0, 1), repeat=3)), dtype=np.int64)
 
 
 def _voxel_graph(grid: VoxelGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Occupied voxel indices (n, 3), id volume (X, Y, Z) (-1 = empty), and directed edge lists (rows, cols, lengths)."""
+    """Occupied voxel indices (n, 3), id volume (X, Y, Z) (-1 = empty), and the 26-neighbour graph in CSR
+    form: indptr (n + 1,), indices (E,) voxel ids, lengths (E,) float64 (rows already sorted, so no COO pass)."""
     occ = grid.occupancy
     ijk = np.argwhere(occ)
-    ids = np.full(occ.shape, -1, dtype=np.int64)
-    ids[tuple(ijk.T)] = np.arange(len(ijk))
-    rows, cols, lens = [], [], []
-    shape = np.asarray(occ.shape)
-    for off in _HALF_OFFSETS:
-        nb = ijk + off
-        ok = np.all((nb >= 0) & (nb < shape), axis=1)
-        a = np.flatnonzero(ok)
-        b = ids[tuple(nb[ok].T)]
-        keep = b >= 0
-        a, b = a[keep], b[keep]
-        length = np.full(len(a), float(np.linalg.norm(off)) * grid.pitch)
-        rows += [a, b]
-        cols += [b, a]
-        lens += [length, length]
-    return ijk, ids, np.concatenate(rows), np.concatenate(cols), np.concatenate(lens)
+    ids = np.full(np.asarray(occ.shape) + 2, -1, dtype=np.int64)  # one empty layer so neighbours never wrap
+    ids[tuple((ijk + 1).T)] = np.arange(len(ijk))
+    flat = np.ravel_multi_index(tuple((ijk + 1).T), ids.shape)
+    delta = np.ravel_multi_index(tuple((_OFFSETS + 1).T), ids.shape) - np.ravel_multi_index((1, 1, 1), ids.shape)
+    nb = ids.ravel()[flat[:, None] + delta[None, :]]  # (n, 26) neighbour ids, -1 = empty
+    has = nb >= 0
+    lengths = np.broadcast_to(np.linalg.norm(_OFFSETS, axis=1) * grid.pitch, nb.shape)
+    indptr = np.concatenate([[0], np.cumsum(has.sum(axis=1))])
+    return ijk, ids[1:-1, 1:-1, 1:-1], indptr, nb[has], lengths[has]
 
 
 def _bone_sources(
@@ -140,12 +133,14 @@ def geodesic_distances(
     if occupied > MAX_VOXELS:  # bulky shapes: coarsen so Dijkstra's cost stays bounded (volume ∝ resolution³)
         coarser = max(int(resolution * (MAX_VOXELS / occupied) ** (1.0 / 3.0)), 16)
         grid = solid_voxels(wv, welded.faces, resolution=coarser)
-    ijk, ids, rows, cols, lens = _voxel_graph(grid)
+    ijk, ids, indptr, cols, lens = _voxel_graph(grid)
     n, j = len(ijk), skeleton.num_joints
-    sj, sv, sd = _bone_sources(grid, ijk, ids, skeleton, leaf_extension)
+    sj, sv, sd = _bone_sources(grid, ijk, ids, skeleton, leaf_extension)  # grouped by joint, in joint order
     eps = 1e-9 * grid.pitch  # csgraph treats explicit zeros as missing edges
+    # Joint j is the super-source row n + j, after every voxel row.
+    source_ptr = indptr[-1] + np.cumsum(np.bincount(sj, minlength=j))
     graph = sp.csr_matrix(
-        (np.concatenate([lens, sd + eps]), (np.concatenate([rows, n + sj]), np.concatenate([cols, sv]))),
+        (np.concatenate([lens, sd + eps]), np.concatenate([cols, sv]), np.concatenate([indptr, source_ptr])),
         shape=(n + j, n + j),
     )
     limit = np.inf
