@@ -1,7 +1,7 @@
 """Rigged-asset extraction from a GltfDocument: bind-pose mesh, skin skeleton and per-vertex weights.
 
 Conventions follow the glTF skinning model: vertices are the skinned primitives' POSITION in mesh
-space, joint bind positions are the translations of inverse(inverseBindMatrix). Joint parents are the
+space (meshes parented under a joint are moved there and follow that joint), joint bind positions are the translations of inverse(inverseBindMatrix). Joint parents are the
 nearest ancestor node that is also a joint of the same skin.
 """
 
@@ -23,7 +23,8 @@ MODES_TRIANGLES = 4
 class RiggedAsset:
     """A skinned mesh at bind pose.
 
-    vertices: (V, 3) float64 bind-space positions of all skinned primitives, concatenated in file order.
+    vertices: (V, 3) float64 bind-space positions of the rig's skinned primitives and of the meshes rigidly
+              parented under its joints, concatenated in node order.
     faces:    (F, 3) int64 triangles indexing `vertices`.
     skeleton: the skin's joints (bind positions, parents, node names).
     weights:  (V, J) float32 CSR matrix, rows normalised to 1 where any weight exists.
@@ -77,11 +78,10 @@ def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.nda
     nodes = doc.items("nodes")
     names = [str(nodes[n].get("name") or f"joint{k}") for k, n in enumerate(joints)]
     names = _unique(names)
-    order = _topological_order(np.asarray(parents))
     skeleton = Skeleton(bind[:, :3, 3], np.asarray(parents), names)
     if len(np.flatnonzero(skeleton.parents < 0)) > 1:
         skeleton = _join_roots(skeleton)
-    return skeleton, joints, bind if order is None else bind
+    return skeleton, joints, bind
 
 
 def _unique(names: list[str]) -> list[str]:
@@ -94,19 +94,6 @@ def _unique(names: list[str]) -> list[str]:
     return out
 
 
-def _topological_order(parents: np.ndarray) -> np.ndarray | None:
-    """None when parents already precede children, else an order that makes them."""
-    if np.all(parents < np.arange(len(parents))):
-        return None
-    order, placed = [], np.zeros(len(parents), bool)
-    while len(order) < len(parents):
-        for j, p in enumerate(parents):
-            if not placed[j] and (p < 0 or placed[p]):
-                order.append(j)
-                placed[j] = True
-    return np.asarray(order)
-
-
 def _join_roots(skeleton: Skeleton) -> Skeleton:
     """Several skin roots: keep them as a forest under the first root (glTF allows forests, our tree does not)."""
     parents = skeleton.parents.copy()
@@ -115,53 +102,108 @@ def _join_roots(skeleton: Skeleton) -> Skeleton:
     return Skeleton(skeleton.positions, parents, skeleton.names, skeleton.kinds)
 
 
+def _chosen_skin(doc: GltfDocument, skinned: list[dict]) -> int:
+    """The skin whose meshes hold the most vertices."""
+    counts: dict[int, int] = {}
+    for n in skinned:
+        for prim in doc.items("meshes")[n["mesh"]].get("primitives", []):
+            if "JOINTS_0" in prim.get("attributes", {}):
+                counts[n["skin"]] = counts.get(n["skin"], 0) + doc.items("accessors")[prim["attributes"]["POSITION"]]["count"]
+    if not counts:
+        raise InvalidInput("skinned meshes carry no JOINTS_0", code="no_skin", field="mesh")
+    return max(counts, key=counts.get)
+
+
+def _same_rig(doc: GltfDocument, a: int, b: int) -> bool:
+    """Whether skins a and b bind the same joints with the same bind matrices (one armature, several meshes)."""
+    skins = doc.items("skins")
+    if a == b:
+        return True
+    if skins[a].get("joints") != skins[b].get("joints"):
+        return False
+    ibm = [skins[k].get("inverseBindMatrices") for k in (a, b)]
+    if ibm[0] is None or ibm[1] is None:
+        return ibm[0] == ibm[1]
+    return bool(np.allclose(doc.accessor(ibm[0]), doc.accessor(ibm[1]), atol=1e-6))
+
+
+def _skinned_part(doc: GltfDocument, prim: dict, j: int) -> tuple[np.ndarray, sp.coo_matrix] | None:
+    """(bind-space vertices, (V, J) weights) of one skinned primitive; None when it has no skin attributes."""
+    attrs = prim.get("attributes", {})
+    if "POSITION" not in attrs or "JOINTS_0" not in attrs:
+        return None
+    v = doc.accessor(attrs["POSITION"]).astype(np.float64)
+    rows, cols, vals = [], [], []
+    s = 0
+    while f"JOINTS_{s}" in attrs and f"WEIGHTS_{s}" in attrs:
+        ji = doc.accessor(attrs[f"JOINTS_{s}"]).astype(np.int64)
+        wi = doc.accessor(attrs[f"WEIGHTS_{s}"]).astype(np.float64)
+        if ji.shape != (len(v), 4) or wi.shape != (len(v), 4):
+            raise InvalidInput("JOINTS/WEIGHTS must be VEC4 per vertex", code="invalid_gltf", field="mesh")
+        if ji.size and ji.max() >= j:
+            raise InvalidInput("JOINTS_n index beyond the skin's joints", code="invalid_gltf", field="mesh")
+        keep = wi > 0
+        rows.append(np.broadcast_to(np.arange(len(v))[:, None], ji.shape)[keep])
+        cols.append(ji[keep])
+        vals.append(wi[keep])
+        s += 1
+    return v, sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(v), j))
+
+
+def _rigid_joint(doc: GltfDocument, node: int, joints: np.ndarray) -> int | None:
+    """Slot of the joint that carries an unskinned mesh node (itself or its nearest joint ancestor), if any."""
+    slot = {int(n): k for k, n in enumerate(joints)}
+    parents = doc.node_parents()
+    while node >= 0 and node not in slot:
+        node = int(parents[node])
+    return slot.get(node)
+
+
 def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
-    """Extract the skinned mesh of the skin that covers most vertices; raise InvalidInput when none."""
+    """Extract the rig whose skin covers most vertices; raise InvalidInput when the file has no skinned mesh.
+
+    Every mesh bound to that armature counts: skinned meshes of any skin with the same joints and bind
+    matrices, and unskinned meshes parented under one of its joints (a robot's rigid parts), which follow
+    that joint with weight 1 and are moved into bind space (bind @ inverse(joint's rest world) @ node world).
+    """
     nodes = doc.items("nodes")
     meshes = doc.items("meshes")
     skinned = [n for n in nodes if "skin" in n and "mesh" in n]
     if not skinned:
         raise InvalidInput("the file has no skinned mesh", code="no_skin", field="mesh")
-    counts: dict[int, int] = {}
-    for n in skinned:
-        for prim in meshes[n["mesh"]].get("primitives", []):
-            if "JOINTS_0" in prim.get("attributes", {}):
-                counts[n["skin"]] = counts.get(n["skin"], 0) + doc.items("accessors")[prim["attributes"]["POSITION"]]["count"]
-    if not counts:
-        raise InvalidInput("skinned meshes carry no JOINTS_0", code="no_skin", field="mesh")
-    skin_index = max(counts, key=counts.get)
+    skin_index = _chosen_skin(doc, skinned)
     skeleton, joints, bind = _skin_skeleton(doc, skin_index)
     j = skeleton.num_joints
-    verts, faces, rows, cols, vals = [], [], [], [], []
-    offset = 0
-    for n in skinned:
-        if n["skin"] != skin_index:
+    world = doc.world_matrices()
+    verts, faces, weights = [], [], []
+    for index, node in enumerate(nodes):
+        if "mesh" not in node:
             continue
-        for prim in meshes[n["mesh"]].get("primitives", []):
-            attrs = prim.get("attributes", {})
-            if "POSITION" not in attrs or "JOINTS_0" not in attrs:
+        if "skin" in node:
+            if not _same_rig(doc, skin_index, int(node["skin"])):
                 continue
-            v = doc.accessor(attrs["POSITION"]).astype(np.float64)
-            faces.append(primitive_triangles(doc, prim, len(v)) + offset)
-            s = 0
-            while f"JOINTS_{s}" in attrs and f"WEIGHTS_{s}" in attrs:
-                ji = doc.accessor(attrs[f"JOINTS_{s}"]).astype(np.int64)
-                wi = doc.accessor(attrs[f"WEIGHTS_{s}"]).astype(np.float64)
-                if ji.shape != (len(v), 4) or wi.shape != (len(v), 4):
-                    raise InvalidInput("JOINTS/WEIGHTS must be VEC4 per vertex", code="invalid_gltf", field="mesh")
-                if ji.size and ji.max() >= j:
-                    raise InvalidInput("JOINTS_n index beyond the skin's joints", code="invalid_gltf", field="mesh")
-                keep = wi > 0
-                rows.append(np.broadcast_to(np.arange(len(v))[:, None] + offset, ji.shape)[keep])
-                cols.append(ji[keep])
-                vals.append(wi[keep])
-                s += 1
-            verts.append(v)
-            offset += len(v)
+            parts = [(prim, _skinned_part(doc, prim, j)) for prim in meshes[node["mesh"]].get("primitives", [])]
+        else:
+            slot = _rigid_joint(doc, index, joints)
+            if slot is None:
+                continue
+            to_bind = bind[slot] @ np.linalg.inv(world[joints[slot]]) @ world[index]
+            parts = []
+            for prim in meshes[node["mesh"]].get("primitives", []):
+                if "POSITION" not in prim.get("attributes", {}):
+                    continue
+                v = doc.accessor(prim["attributes"]["POSITION"]).astype(np.float64)
+                w = sp.coo_matrix((np.ones(len(v)), (np.arange(len(v)), np.full(len(v), slot))), shape=(len(v), j))
+                parts.append((prim, (v @ to_bind[:3, :3].T + to_bind[:3, 3], w)))
+        for prim, part in parts:
+            if part is None:
+                continue
+            offset = sum(len(v) for v in verts)
+            faces.append(primitive_triangles(doc, prim, len(part[0])) + offset)
+            verts.append(part[0])
+            weights.append(part[1])
     vertices = np.concatenate(verts)
-    w = sp.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(vertices), j)
-    )
+    w = sp.vstack(weights).tocsr()
     sums = np.asarray(w.sum(axis=1)).ravel()
     w = sp.diags(np.where(sums > 0, 1.0 / np.maximum(sums, 1e-12), 0.0)) @ w
     return RiggedAsset(vertices, np.concatenate(faces), skeleton, w.astype(np.float32).tocsr(), joints, bind)
