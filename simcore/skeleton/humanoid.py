@@ -8,8 +8,9 @@ is up × forward (Mixamo: facing +Z with +Y up puts the left hand at +X).
 
 Joint placement follows the medial paths, with proportions measured on Mixamo characters (fractions along
 the spine between Hips and Neck, along the arm from shoulder to fingertip, knee halfway between hip and
-ankle, ankle at the foot's corner). Long medial branches the template leaves out (wings, tails) become SPRING
-chains (`extra_limbs`). Joints that land outside the solid are moved to the nearest inside voxel.
+ankle, ankle at the foot's corner); a placed body whose bones stray from the medial tree lowers the
+confidence. Long medial branches the template leaves out (wings, tails) become SPRING chains
+(`extra_limbs`). Joints that land outside the solid are moved to the nearest inside voxel.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from simcore.errors import InvalidInput
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
@@ -44,6 +46,9 @@ HIPS_ABOVE_CROTCH = 0.01  # × height: Hips sits just above where the leg branch
 FUSED_CROTCH = 0.4  # a leg split below this share of the height means the thighs are fused in the voxels
 NECK_AT, HEAD_AT = 0.17, 0.35  # of shoulder line → head top (mean of Mixamo Xbot and Soldier)
 TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (0.575 on Mixamo's Xbot and Soldier)
+# Mean distance of the placed body bones from the medial tree, × the mesh's longest side: up to RESIDUAL_OK the
+# template lies along the body (dev humanoids: 0.006-0.014); RESIDUAL_SLACK further on, the check reaches 0.
+RESIDUAL_OK, RESIDUAL_SLACK = 0.015, 0.01
 
 
 @dataclass
@@ -304,6 +309,16 @@ def _main_tree(vertices: np.ndarray, faces: np.ndarray) -> tuple[VoxelGrid, _Tre
     return grid, _Tree(forest.positions, forest.radius, forest.adjacency, nodes)
 
 
+def fit_residual(medial: np.ndarray, positions: np.ndarray, parents: np.ndarray, samples: int = 9) -> float:
+    """Mean distance (metres) from points along the bones of `positions` (J, 3) / `parents` (J,) to the nearest
+    of the medial nodes `medial` (N, 3): how far a placed template strays from the body's medial axis."""
+    child = np.flatnonzero(parents >= 0)
+    t = np.linspace(0.0, 1.0, samples)[None, :, None]
+    heads, tails = positions[parents[child]][:, None], positions[child][:, None]
+    points = (heads + t * (tails - heads)).reshape(-1, 3)
+    return float(cKDTree(medial).query(points)[0].mean())
+
+
 def _facing_label(forward: np.ndarray) -> str:
     name = max(AXES, key=lambda k: float(AXES[k] @ forward))
     return name if name.startswith("-") else "+" + name
@@ -315,7 +330,10 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
 
     vertices: (V, 3) float64, faces: (F, 3) int64, any frame (up detected unless `up_axis` is given).
     force: accept a biped below the confidence threshold (options.skeleton = "humanoid"); a mesh with no biped
-    layout at all still returns skeleton None. Report: detected, confidence, checks, up, facing, fingers.
+    layout at all still returns skeleton None. The confidence multiplies the detection checks with one on the
+    placed body (`on_medial_axis`: its bones must run along the medial tree, see `fit_residual`), so a biped
+    layout whose template lands off the body (odd proportions) falls back to the geometric skeleton.
+    Report: detected, confidence, checks, residual, up, facing, fingers.
     """
     up_given, forward_given = _axis(up_axis, "up_axis"), _axis(forward_axis, "forward_axis")
     report: dict[str, Any] = {"detected": False}
@@ -350,6 +368,15 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
     positions = [joints[n] for n in names]
     kinds = [JointKind.BODY] * len(names)
     parents = [names.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in names]
+    scale = float(np.ptp(v, axis=0).max())
+    residual = fit_residual(tree.pos[tree.nodes], np.asarray(positions), np.asarray(parents)) / scale
+    biped.checks["on_medial_axis"] = _soft(residual, 0.0, RESIDUAL_OK, RESIDUAL_SLACK)
+    biped.confidence = float(np.prod(list(biped.checks.values())))
+    report.update(confidence=round(biped.confidence, 3), checks={k: round(x, 3) for k, x in biped.checks.items()},
+                  residual=round(residual, 4))
+    if biped.confidence < CONFIDENT and not force:
+        report["reason"] = "the fitted template strays from the medial axis"
+        return HumanoidFit(None, report)
     fingers: dict[str, np.ndarray] | None = None
     if max_joints >= len(BODY_JOINTS) + len(HAND_JOINTS):
         fingers, finger_report = fit_fingers(v, faces, joints, biped.up, forward, left)
@@ -361,7 +388,6 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
             kinds.append(JointKind.HAND)
             parents.append(names.index(HAND_PARENTS[n]))
     names = [full_name(n) for n in names]
-    scale = float(np.ptp(v, axis=0).max())
     extras = extra_limbs(tree.pos, tree.radius, tree.adjacency, tree.nodes, biped.parent,
                          [biped.head, *biped.feet, *biped.hands], np.asarray(positions), biped.height, scale)
     added = 0

@@ -8,7 +8,7 @@ import pytest
 from simcore.geometry.capsule_creatures import quadruped, stick_humanoid
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
-from simcore.skeleton.humanoid import fit_humanoid
+from simcore.skeleton.humanoid import fit_humanoid, fit_residual
 from simcore.skeleton.mixamo import BODY_JOINTS, full_name
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import JointKind
@@ -86,3 +86,34 @@ def test_a_tail_becomes_a_spring_chain_under_the_template():
     assert skeleton.kinds[skeleton.parents[root]] == JointKind.BODY
     plain = fit_humanoid(vertices, faces)
     assert plain.report["extra_limbs"] == 0
+
+
+def test_fit_residual_is_the_mean_distance_of_the_bones_from_the_medial_nodes():
+    medial = np.stack([np.zeros(101), np.linspace(0.0, 1.0, 101), np.zeros(101)], axis=1)
+    parents = np.array([-1, 0, 1])
+    on_axis = np.array([[0.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 1.0, 0.0]])
+    assert fit_residual(medial, on_axis, parents) < 0.005  # medial nodes are 0.01 apart
+    assert abs(fit_residual(medial, on_axis + [0.1, 0.0, 0.0], parents) - 0.1) < 0.001
+
+
+def test_biped_fit_reports_a_small_residual():
+    vertices, faces, _ = stick_humanoid()
+    fit = fit_humanoid(vertices, faces)
+    assert fit.skeleton is not None
+    assert fit.report["checks"]["on_medial_axis"] == 1.0 and fit.report["residual"] < 0.015
+
+
+def test_template_placed_off_the_body_falls_back_to_geometric(monkeypatch):
+    import simcore.skeleton.humanoid as humanoid
+
+    place = humanoid._place_body
+
+    def off_body(tree, biped, left, forward):  # a template landing a fifth of the height beside the body
+        return {name: p + 0.2 * biped.height * forward for name, p in place(tree, biped, left, forward).items()}
+
+    monkeypatch.setattr(humanoid, "_place_body", off_body)
+    vertices, faces, _ = stick_humanoid()
+    fit = fit_humanoid(vertices, faces)
+    assert fit.skeleton is None and fit.report["checks"]["on_medial_axis"] < 0.5
+    assert predict_skeleton(vertices, faces, method="auto").method == "geometric"
+    assert fit_humanoid(vertices, faces, force=True).skeleton is not None
