@@ -35,6 +35,7 @@ class PipelineInputs:
     mesh_format: str
     motion_path: Path | None = None
     motion_format: str | None = None
+    motion_name: str | None = None  # the uploaded file's own name (stored files are named by hash): names the clip
 
 
 @dataclass

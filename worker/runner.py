@@ -73,8 +73,9 @@ def execute(job_id: uuid.UUID, settings: Settings, worker_id: str) -> str:
         if claim is None:
             return "skipped"
         job = session.get(Job, job_id)
-        inputs_spec = (Path(job.mesh_asset.path), job.mesh_asset.format,
-                       Path(job.motion_asset.path) if job.motion_asset else None, job.motion_asset.format if job.motion_asset else None)
+        motion = job.motion_asset
+        inputs_spec = (Path(job.mesh_asset.path), job.mesh_asset.format, Path(motion.path) if motion else None,
+                       motion.format if motion else None, Path(motion.filename).stem if motion else None)
         options = JobOptions.model_validate(job.options)
     storage = LocalStorage(settings.storage_dir)
     work = storage.work_dir(job_id, claim.attempt)

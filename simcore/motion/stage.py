@@ -46,7 +46,7 @@ def load_uploaded_clip(path: Path, fmt: str | None, state: "PipelineState") -> M
     if fmt == "bvh":
         from simcore.io.bvh import parse_bvh
 
-        return parse_bvh(data, state.options.motion.unit_scale, name=path.stem)
+        return parse_bvh(data, state.options.motion.unit_scale, name=state.inputs.motion_name or path.stem)
     if fmt in ("glb", "gltf"):
         return _clip_from_gltf_bytes(data, state)
     if fmt == "fbx":

@@ -55,6 +55,15 @@ def test_bvh_upload_sets_animation_and_report(tmp_path):
     assert rep["clip"]["frames"] == 7 and rep["clip"]["source_frames"] == 20 and rep["unmapped_target_joints"] == []
     assert rep["foot_sliding"]["sliding_m_per_s"] >= 0 and 0 <= rep["self_penetration"]["penetration_fraction"] <= 1
     assert seen[-1] == pytest.approx(0.6)
+    assert rep["clip"]["name"] == "walk"  # no uploaded name given: the file's own stem
+
+
+def test_bvh_clip_is_named_after_the_uploaded_file_not_the_stored_one(tmp_path):
+    stored = _walk_bvh(tmp_path).rename(tmp_path / "9f86d081884c7d65.bvh")  # storage names uploads by hash
+    state = _state(tmp_path, stored, "bvh")
+    state.inputs.motion_name = "studio_walk_v2"
+    stage.run(state, _progress([]))
+    assert state.report["motion"]["clip"]["name"] == "studio_walk_v2"
 
 
 def test_no_motion_is_skipped_quietly(tmp_path):

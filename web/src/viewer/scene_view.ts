@@ -32,6 +32,7 @@ export class SceneView {
   colorMode: ColorMode = "texture";
   selectedBone: string | null = null;
   showSkeleton = true;
+  follow = true;  // the camera tracks the first model's root bone horizontally (clips that walk away stay in view)
   playing = false;
   time = 0;
   onTime: (t: number) => void = () => {};
@@ -42,6 +43,7 @@ export class SceneView {
   private dirty = true;
   private frame = 0;
   private clipName: string | null = null;
+  private followAnchor: THREE.Vector3 | null = null;  // root bone position the camera was last placed for
   private resize: ResizeObserver;
 
   constructor(readonly canvas: HTMLCanvasElement) {
@@ -153,6 +155,7 @@ export class SceneView {
     this.camera.updateProjectionMatrix();
     this.controls.target.copy(center);
     this.controls.update();
+    this.followAnchor = this.rootPosition();  // framed on the bind pose; the clip's first frame moves the camera
     this.setClip(this.clipName && this.clipNames().includes(this.clipName) ? this.clipName : this.clipNames()[0] ?? null);
     this.applyColors();
     this.setSkeletonVisible(this.showSkeleton);
@@ -189,7 +192,27 @@ export class SceneView {
       if (m.action) m.action.time = Math.min(t, m.action.getClip().duration);
       m.mixer.update(0);
     }
+    this.followRoot();
     this.invalidate();
+  }
+
+  private rootPosition(): THREE.Vector3 | null {
+    const bone = this.models[0]?.bones[0];
+    if (!bone) return null;
+    bone.updateWorldMatrix(true, false);
+    return bone.getWorldPosition(new THREE.Vector3());
+  }
+
+  /** Move camera and orbit target by the root bone's horizontal displacement since the last call. */
+  private followRoot(): void {
+    const now = this.rootPosition();
+    if (now && this.followAnchor && this.follow) {
+      const delta = now.clone().sub(this.followAnchor).setY(0);
+      this.camera.position.add(delta);
+      this.controls.target.add(delta);
+      this.controls.update();
+    }
+    this.followAnchor = now;
   }
 
   setSkeletonVisible(on: boolean): void {

@@ -51,6 +51,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
   const playButton = h("button", { type: "button", id: "viewer-play", onclick: () => setPlaying(!view.playing) }, "Play");
   const scrub = h("input", { type: "range", id: "viewer-scrub", min: "0", max: "1", step: "0.001", value: "0", "aria-label": "animation time",
     oninput: () => { setPlaying(false); view.setTime(Number(scrub.value) * view.duration()); syncTime(); } });
+  const followBox = h("input", { type: "checkbox", id: "viewer-follow", checked: true, onchange: () => { view.follow = followBox.checked; } });
   const timeText = h("span", { class: "muted", id: "viewer-time" }, "0.00 s");
   const plot: VolumePlot | null = input.volume ? volumePlot(input.volume.lbs, input.volume.refined) : null;
 
@@ -163,7 +164,8 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
         h("label", { for: "viewer-bone" }, "Bone"), boneSelect, legend,
         h("label", {}, skeletonBox, " Skeleton overlay")),
       h("fieldset", {}, h("legend", {}, "Animation"), h("label", { for: "viewer-clip" }, "Clip"), clipSelect,
-        h("div", { class: "row" }, playButton, timeText), scrub))),
+        h("div", { class: "row" }, playButton, timeText), scrub,
+        h("label", { title: "keep the character in view when the clip moves it" }, followBox, " Follow the character")))),
   plot ? h("div", { class: "panel", style: "margin-top:12px" }, h("h3", {}, "Volume change: LBS vs physics"),
     h("p", { class: "muted" }, "signed volume relative to the rest pose per frame; physics should stay nearer 0 %"), plot.el) : null);
 
