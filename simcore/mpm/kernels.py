@@ -34,7 +34,7 @@ def polar_rotation(F: wp.mat33) -> wp.mat33:
         Y = 0.5 * (g * X + (1.0 / g) * wp.transpose(wp.inverse(X)))
         e = Y - X
         X = Y
-        if wp.ddot(e, e) < 1.0e-12:
+        if wp.ddot(e, e) < 1.0e-8:  # a step under 1e-4: Newton's quadratic rate leaves ~1e-8, below float32 rounding
             break
     return X
 
@@ -138,11 +138,18 @@ def p2g(
     dx: float,
     dt: float,
     n: int,
+    offset: int,
+    copy: int,
     grid_mv: wp.array(dtype=wp.vec3),
     grid_m: wp.array(dtype=float),
 ):
-    """Eq. 7: scatter APIC momentum plus the fixed-corotated stress impulse to the 3³ stencil."""
-    p = wp.tid()
+    """Eq. 7: scatter APIC momentum plus the fixed-corotated stress impulse to the 3³ stencil.
+
+    Thread t handles particle `offset + t` and scatters into grid copy `copy` (nodes copy·n³ … (copy+1)·n³ - 1),
+    so concurrent CPU launches over disjoint particle ranges never add into the same memory.
+    """
+    p = wp.tid() + offset
+    base = copy * n * n * n
     inv_dx = 1.0 / dx
     b = stencil_base(x[p], origin, inv_dx, n)
     fx = stencil_fraction(x[p], origin, inv_dx, b)
@@ -152,14 +159,20 @@ def p2g(
     J = wp.determinant(Fp)
     kirchhoff = 2.0 * mu[p] * (Fp - R) * wp.transpose(Fp) + wp.identity(n=3, dtype=float) * (lam[p] * J * (J - 1.0))
     affine = kirchhoff * (-dt * vol * 4.0 * inv_dx * inv_dx) + C[p] * mass
-    mv = v[p] * mass
+    # mv + affine·dpos with dpos = ((i, j, k) - fx)·dx, split per axis so the stencil loop only adds vectors.
+    ax = wp.vec3(affine[0, 0], affine[1, 0], affine[2, 0]) * dx
+    ay = wp.vec3(affine[0, 1], affine[1, 1], affine[2, 1]) * dx
+    az = wp.vec3(affine[0, 2], affine[1, 2], affine[2, 2]) * dx
+    m0 = v[p] * mass - affine * fx * dx
     for i in range(3):
+        mi = m0 + ax * float(i)
         for j in range(3):
+            mj = mi + ay * float(j)
+            wij = W[0, i] * W[1, j]
             for k in range(3):
-                w = W[0, i] * W[1, j] * W[2, k]
-                dpos = (wp.vec3(float(i), float(j), float(k)) - fx) * dx
-                node = node_index(b[0] + i, b[1] + j, b[2] + k, n)
-                wp.atomic_add(grid_mv, node, w * (mv + affine * dpos))
+                w = wij * W[2, k]
+                node = base + node_index(b[0] + i, b[1] + j, b[2] + k, n)
+                wp.atomic_add(grid_mv, node, w * (mj + az * float(k)))
                 wp.atomic_add(grid_m, node, w * mass)
 
 
@@ -185,6 +198,18 @@ def drivers_to_grid(
                 node = node_index(b[0] + i, b[1] + j, b[2] + k, n)
                 wp.atomic_add(drv_v, node, w * dv[d])
                 wp.atomic_add(drv_w, node, w)
+
+
+@wp.kernel
+def sum_copies(active: wp.array(dtype=wp.int32), n: int, dense: int, copies: int,
+               grid_mv: wp.array(dtype=wp.vec3), grid_m: wp.array(dtype=float)):
+    """Add P2G copies 1..copies-1 into copy 0 (all nodes when dense, else the active blocks'). Forward only."""
+    node = wp.tid()
+    if dense == 0:
+        node = block_node(active, node, n)
+    for c in range(1, copies):
+        grid_mv[node] = grid_mv[node] + grid_mv[c * n * n * n + node]
+        grid_m[node] = grid_m[node] + grid_m[c * n * n * n + node]
 
 
 @wp.func
@@ -267,14 +292,19 @@ def g2p(
     dt: float,
     n: int,
     v_max: float,
+    offset: int,
+    copy: int,
     x_out: wp.array(dtype=wp.vec3),
     v_out: wp.array(dtype=wp.vec3),
     C_out: wp.array(dtype=wp.mat33),
     F_out: wp.array(dtype=wp.mat33),
     clamps: wp.array(dtype=wp.int32),
 ):
-    """Eqs. 8-9: gather velocity and APIC affine C, advect, update F; clamp |v| and det F, counting clamps."""
-    p = wp.tid()
+    """Eqs. 8-9: gather velocity and APIC affine C, advect, update F; clamp |v| and det F, counting clamps.
+
+    Thread t handles particle `offset + t`; clamps are counted in clamps[2·copy] (|v|) and [2·copy + 1] (det F).
+    """
+    p = wp.tid() + offset
     inv_dx = 1.0 / dx
     b = stencil_base(x[p], origin, inv_dx, n)
     fx = stencil_fraction(x[p], origin, inv_dx, b)
@@ -292,13 +322,13 @@ def g2p(
     speed = wp.length(vel)
     if speed > v_max:
         vel = vel * (v_max / speed)
-        wp.atomic_add(clamps, 0, 1)
+        wp.atomic_add(clamps, 2 * copy, 1)
     Fn = (wp.identity(n=3, dtype=float) + Cn * dt) * F[p]
     J = wp.determinant(Fn)
     if not (J > J_MIN and J < J_MAX):  # also catches NaN
         Fn = F[p]
         Cn = wp.mat33(0.0)
-        wp.atomic_add(clamps, 1, 1)
+        wp.atomic_add(clamps, 2 * copy + 1, 1)
     x_out[p] = x[p] + vel * dt
     v_out[p] = vel
     C_out[p] = Cn
@@ -309,16 +339,18 @@ def g2p(
 def clear_blocks(
     active: wp.array(dtype=wp.int32),
     n: int,
+    copies: int,
     grid_mv: wp.array(dtype=wp.vec3),
     grid_m: wp.array(dtype=float),
     drv_v: wp.array(dtype=wp.vec3),
     drv_w: wp.array(dtype=float),
     grid_v: wp.array(dtype=wp.vec3),
 ):
-    """Zero the active blocks' nodes so the next substep starts from an empty grid."""
+    """Zero the active blocks' nodes (every P2G copy) so the next substep starts from an empty grid."""
     node = block_node(active, wp.tid(), n)
-    grid_mv[node] = wp.vec3(0.0)
-    grid_m[node] = 0.0
+    for c in range(copies):
+        grid_mv[c * n * n * n + node] = wp.vec3(0.0)
+        grid_m[c * n * n * n + node] = 0.0
     drv_v[node] = wp.vec3(0.0)
     drv_w[node] = 0.0
     grid_v[node] = wp.vec3(0.0)

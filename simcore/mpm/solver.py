@@ -7,6 +7,9 @@ differentiable frame stores only particle states (x, v, C, F: 24 floats per part
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +57,9 @@ class SubstepInputs:
     dv: wp.array | None = None
 
 
+MAX_CPU_THREADS = 8  # particle passes split over at most this many cores
+
+
 def warp_device(device: str | None = None) -> str:
     """Initialise Warp quietly and return the device name ("cpu", "cuda:0"); default: CUDA when present."""
     wp.config.quiet = True
@@ -71,6 +77,10 @@ class MPMSolver:
     bench/mpm.py measured the dense pass faster: launch-bound, 0.16 vs 0.28 ms per substep at 20k/64³ on an H100); gravity: m/s²; drive_gain: how strongly driver
     weight on a node replaces its velocity (weight × gain, capped at 1); bound: wall band in nodes;
     v_max: velocity clamp in m/s (None: 0.5 dx/dt per substep, the CFL limit).
+    threads: CPU cores for the particle passes (None: every core up to MAX_CPU_THREADS on CPU without gradients,
+    else 1). Warp runs a CPU launch on one core and releases the GIL, so P2G and G2P are launched over contiguous
+    particle ranges from a thread pool; each range scatters into its own grid copy, added into copy 0 before the grid pass
+    (`sum_copies`; the same sum in another order: results agree with one thread to float rounding).
     """
 
     def __init__(
@@ -87,10 +97,17 @@ class MPMSolver:
         drive_gain: float = 4.0,
         bound: int = 3,
         requires_grad: bool = False,
+        threads: int | None = None,
     ) -> None:
         if grid % K.BLOCK:
             raise ValueError(f"grid must be a multiple of {K.BLOCK}, got {grid}")
         self.device = warp_device(device)
+        cpu = not self.device.startswith("cuda")
+        if threads is None:
+            threads = min(os.cpu_count() or 1, MAX_CPU_THREADS) if cpu and not requires_grad else 1
+        if threads > 1 and (requires_grad or not cpu):
+            raise ValueError("threads > 1 is for forward-only CPU solvers (a tape records one thread's launches)")
+        self.threads = max(1, min(int(threads), max(int(num_particles), 1)))
         self.n, self.dx, self.num_particles = int(grid), float(dx), int(num_particles)
         self.mass, self.vol = float(particle_mass), float(particle_volume)
         sparse = not self.device.startswith("cuda") if sparse is None else sparse
@@ -98,16 +115,24 @@ class MPMSolver:
         self.requires_grad = requires_grad
         nodes, nb = self.n**3, (self.n // K.BLOCK) ** 3
         g = dict(device=self.device, requires_grad=requires_grad)
-        self.grid_mv = wp.zeros(nodes, dtype=wp.vec3, **g)
-        self.grid_m = wp.zeros(nodes, dtype=float, **g)
+        self.grid_mv = wp.zeros(nodes * self.threads, dtype=wp.vec3, **g)  # one P2G copy per thread
+        self.grid_m = wp.zeros(nodes * self.threads, dtype=float, **g)
         self.drv_v = wp.zeros(nodes, dtype=wp.vec3, **g)
         self.drv_w = wp.zeros(nodes, dtype=float, **g)
         self.grid_v = wp.zeros(nodes, dtype=wp.vec3, **g)
         self.flags = wp.zeros(nb, dtype=wp.int32, device=self.device)
         self.active = wp.zeros(nb, dtype=wp.int32, device=self.device)
         self.count = wp.zeros(1, dtype=wp.int32, device=self.device)
-        self.clamps = wp.zeros(2, dtype=wp.int32, device=self.device)  # [velocity clamps, det F rejections]
+
         self.active_blocks = 0
+        # [velocity clamps, det F rejections] per thread
+        self.clamps = wp.zeros(2 * self.threads, dtype=wp.int32, device=self.device)
+        bounds = np.linspace(0, self.num_particles, self.threads + 1).astype(int)
+        self.ranges = [(int(a), int(b - a)) for a, b in zip(bounds[:-1], bounds[1:])]  # (offset, count) per thread
+        self.pool: ThreadPoolExecutor | None = None
+        if self.threads > 1:
+            wp.load_module(K, device=self.device)  # compile/load once here, never from two threads at once
+            self.pool = ThreadPoolExecutor(self.threads, thread_name_prefix="mpm")
 
     # --- state -----------------------------------------------------------------------------------------
 
@@ -136,22 +161,37 @@ class MPMSolver:
         wp.launch(K.compact_blocks, dim=self.flags.shape[0], inputs=[self.flags, self.active, self.count], device=self.device)
         self.active_blocks = int(self.count.numpy()[0])  # host read: the launch size of the grid passes
 
+    def _particle_pass(self, kernel, args: Callable[[int, int], list]) -> None:
+        """Launch `kernel` over every particle range; args(offset, thread index) → its inputs."""
+        launches = [(count, args(offset, t)) for t, (offset, count) in enumerate(self.ranges)]
+        if self.pool is None:
+            for count, inputs in launches:
+                wp.launch(kernel, dim=count, inputs=inputs, device=self.device)
+            return
+        futures = [self.pool.submit(wp.launch, kernel, dim=count, inputs=inputs, device=self.device)
+                   for count, inputs in launches]
+        for f in futures:
+            f.result()
+
     def _transfer(self, s_in: ParticleState, s_out: ParticleState, inp: SubstepInputs) -> None:
         origin, dev, n = wp.vec3(*inp.origin), self.device, self.n
-        wp.launch(K.p2g, dim=self.num_particles, device=dev, inputs=[
+        self._particle_pass(K.p2g, lambda offset, t: [
             s_in.x, s_in.v, s_in.C, s_in.F, inp.mu, inp.lam, self.mass, self.vol, origin, self.dx, inp.dt, n,
-            self.grid_mv, self.grid_m])
+            offset, t, self.grid_mv, self.grid_m])
         if inp.dp is not None and inp.dp.shape[0]:
             wp.launch(K.drivers_to_grid, dim=inp.dp.shape[0], device=dev,
                       inputs=[inp.dp, inp.dv, origin, self.dx, n, self.drv_v, self.drv_w])
+        if self.threads > 1:
+            dim = self.active_blocks * K.BLOCK**3 if self.sparse else n**3
+            wp.launch(K.sum_copies, dim=dim, inputs=[self.active, n, int(not self.sparse), self.threads, self.grid_mv, self.grid_m], device=dev)
         common = [self.grid_mv, self.grid_m, self.drv_v, self.drv_w, self.gravity, inp.dt, self.drive_gain, self.bound, self.grid_v]
         if self.sparse:
             wp.launch(K.grid_update_sparse, dim=self.active_blocks * K.BLOCK**3, inputs=[self.active, n, *common], device=dev)
         else:
             wp.launch(K.grid_update_dense, dim=n**3, inputs=[n, *common], device=dev)
         v_max = 0.5 * self.dx / inp.dt
-        wp.launch(K.g2p, dim=self.num_particles, device=dev, inputs=[
-            s_in.x, s_in.F, self.grid_v, origin, self.dx, inp.dt, n, v_max,
+        self._particle_pass(K.g2p, lambda offset, t: [
+            s_in.x, s_in.F, self.grid_v, origin, self.dx, inp.dt, n, v_max, offset, t,
             s_out.x, s_out.v, s_out.C, s_out.F, self.clamps])
 
     def _clear(self, with_grads: bool) -> None:
@@ -164,7 +204,7 @@ class MPMSolver:
             return
         dim = self.active_blocks * K.BLOCK**3
         for group in sets:
-            wp.launch(K.clear_blocks, dim=dim, inputs=[self.active, self.n, *group], device=self.device)
+            wp.launch(K.clear_blocks, dim=dim, inputs=[self.active, self.n, self.threads, *group], device=self.device)
         wp.launch(K.clear_flags, dim=self.active_blocks, inputs=[self.active, self.flags], device=self.device)
 
     def substep(self, s_in: ParticleState, s_out: ParticleState, inp: SubstepInputs) -> None:
@@ -190,7 +230,7 @@ class MPMSolver:
 
     def take_clamp_counts(self) -> tuple[int, int]:
         """(velocity clamps, det F rejections) since the last call."""
-        c = self.clamps.numpy()
+        c = self.clamps.numpy().reshape(-1, 2).sum(axis=0)
         self.clamps.zero_()
         return int(c[0]), int(c[1])
 
