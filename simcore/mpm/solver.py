@@ -132,7 +132,7 @@ class MPMSolver:
         self.pool: ThreadPoolExecutor | None = None
         if self.threads > 1:
             wp.load_module(K, device=self.device)  # compile/load once here, never from two threads at once
-            self.pool = ThreadPoolExecutor(self.threads, thread_name_prefix="mpm")
+            self.pool = ThreadPoolExecutor(self.threads - 1, thread_name_prefix="mpm")
 
     # --- state -----------------------------------------------------------------------------------------
 
@@ -169,7 +169,8 @@ class MPMSolver:
                 wp.launch(kernel, dim=count, inputs=inputs, device=self.device)
             return
         futures = [self.pool.submit(wp.launch, kernel, dim=count, inputs=inputs, device=self.device)
-                   for count, inputs in launches]
+                   for count, inputs in launches[1:]]
+        wp.launch(kernel, dim=launches[0][0], inputs=launches[0][1], device=self.device)  # this thread takes a share
         for f in futures:
             f.result()
 
