@@ -93,6 +93,7 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
     page.screenshot(path=str(ARTIFACTS / "01-signed-in.png"))
 
     page.goto("/#/jobs")
+    page.reload()  # a fresh navigation with the stored key, so the timings below are the jobs page's own
     page.wait_for_selector("#jobs-table, .empty")  # "No jobs yet" on a fresh server
     first_load = page_weight_and_tti(page)
 
