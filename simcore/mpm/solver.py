@@ -8,8 +8,8 @@ differentiable frame stores only particle states (x, v, C, F: 24 floats per part
 from __future__ import annotations
 
 import os
-from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -79,8 +79,8 @@ class MPMSolver:
     v_max: velocity clamp in m/s (None: 0.5 dx/dt per substep, the CFL limit).
     threads: CPU cores for the particle passes (None: every core up to MAX_CPU_THREADS on CPU without gradients,
     else 1). Warp runs a CPU launch on one core and releases the GIL, so P2G and G2P are launched over contiguous
-    particle ranges from a thread pool; each range scatters into its own grid copy, added into copy 0 before the grid pass
-    (`sum_copies`; the same sum in another order: results agree with one thread to float rounding).
+    particle ranges from a thread pool; each range scatters into its own grid copy, added into copy 0 before the
+    grid pass (`sum_copies`; the same sum in another order: results agree with one thread to float rounding).
     """
 
     def __init__(
@@ -123,7 +123,6 @@ class MPMSolver:
         self.flags = wp.zeros(nb, dtype=wp.int32, device=self.device)
         self.active = wp.zeros(nb, dtype=wp.int32, device=self.device)
         self.count = wp.zeros(1, dtype=wp.int32, device=self.device)
-
         self.active_blocks = 0
         # [velocity clamps, det F rejections] per thread
         self.clamps = wp.zeros(2 * self.threads, dtype=wp.int32, device=self.device)
