@@ -7,8 +7,8 @@ sparsely too), spinning and sheared so F, C and the polar iterations do real wor
   sparse  grid passes over the active 4³ blocks only (what the product runs), particle passes on every core
           (MPMSolver's default) and again on one core
   dense   grid passes over every node (the in-run reference)
-Forward: ms per substep (median over 6 timed blocks, and the fastest block) and particle-substeps per second. Backward: ms per substep of
-`backward_substep` (grid recompute + adjoint). Memory: bytes Warp allocated for a differentiable
+Forward: ms per substep (median over 6 timed blocks, and the fastest block) and particle-substeps per second.
+Backward: ms per substep of `backward_substep` (grid recompute + adjoint). Memory: bytes Warp allocated for a differentiable
 100-substep frame (stored particle states + grid + gradients), and on CPU the process's peak RSS growth.
 Prints a table and writes bench/results/mpm.json.
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 from simcore.io.gltf_document import GltfDocument
 from tests.api.conftest import INGEST_ONLY
 
@@ -98,3 +100,22 @@ def test_openapi_is_served_with_clean_operation_ids(client):
     spec = client.get("/openapi.json").json()
     ops = {op["operationId"] for path in spec["paths"].values() for op in path.values()}
     assert {"jobs-submit_job", "jobs-get_job", "jobs-list_jobs", "jobs-cancel_job", "jobs-job_events"} <= ops
+
+
+def test_uploaded_bvh_clip_is_named_after_the_uploaded_file(client, auth, dev_assets):
+    from tests.simcore.motion.motion_samples import bvh_text, humanoid
+
+    skel = humanoid(prefix="")
+    angles = np.zeros((12, skel.num_joints, 3))
+    angles[:, skel.names.index("LeftUpLeg"), 1] = 20 * np.sin(np.arange(12) / 3)
+    roots = np.stack([np.zeros(12), np.full(12, 1.0), np.arange(12) * 0.03], axis=1)
+    bvh = bvh_text(skel, roots, angles, ["ZXY"] * skel.num_joints).encode()
+    r = client.post("/api/v1/jobs", headers=auth,
+                    files={"mesh": ("rigged_figure.glb", (dev_assets / "rigged_figure.glb").read_bytes()), "motion": ("studio walk.bvh", bvh)},
+                    data={"options": '{"skeleton": "keep", "stages": ["skeleton", "skin", "motion"]}'})
+    assert r.status_code == 202, r.text
+    job = client.get(f"/api/v1/jobs/{r.json()['id']}", headers=auth).json()
+    assert job["status"] == "succeeded", job
+    report_url = next(a["url"] for a in job["artifacts"] if a["name"] == "report.json")
+    clip = client.get(report_url, headers=auth).json()["motion"]["clip"]
+    assert clip["name"] == "studio walk" and clip["source_format"] == "bvh"  # not the stored file's hash name

@@ -337,3 +337,37 @@ def test_progress_falls_back_to_polling_when_events_are_blocked(page, dashboard_
     assert page.get_attribute("#job-head [role=progressbar]", "aria-valuenow") == "100"
     page.wait_for_selector("#viewer-stage[data-state=ready]", timeout=60_000)
     assert page.input_value("#viewer-clip") == "Survey"  # the animated result plays the chosen clip
+
+
+def test_camera_follows_a_clip_that_walks_away_and_stays_put_when_told(page, dashboard_server, dev_assets):
+    from tests.simcore.motion.motion_samples import bvh_text, humanoid
+
+    skel = humanoid(prefix="")
+    frames = 24
+    roots = np.stack([np.zeros(frames), np.full(frames, 1.0), np.arange(frames) * 0.1], axis=1)  # walks 2.3 m
+    bvh = bvh_text(skel, roots, np.zeros((frames, skel.num_joints, 3)), ["ZXY"] * skel.num_joints).encode()
+    r = httpx.post(f"{dashboard_server.url}/api/v1/jobs", headers={"Authorization": f"Bearer {dashboard_server.local_key}"},
+                   files={"mesh": ("rigged_figure.glb", (dev_assets / "rigged_figure.glb").read_bytes()), "motion": ("walk.bvh", bvh)},
+                   data={"options": json.dumps({"skeleton": "keep"})}, timeout=60)
+    assert r.status_code == 202, r.text
+    sign_in(page, dashboard_server.local_key)
+    page.goto(f"/#/jobs/{r.json()['id']}")
+    page.wait_for_selector("#job-head .badge[data-status=succeeded]", timeout=JOB_TIMEOUT_MS)
+    page.wait_for_selector("#viewer-stage[data-state=ready]", timeout=60_000)
+    state = """() => { const v = window.rigforgeViewer.view; const p = v.models[0].bones[0].getWorldPosition(v.camera.position.clone());
+      return { root: p.toArray(), target: v.controls.target.toArray(), camera: v.camera.position.toArray() }; }"""
+
+    def scrub(fraction: str) -> dict:
+        page.eval_on_selector("#viewer-scrub", f"(el) => {{ el.value = '{fraction}'; el.dispatchEvent(new Event('input')); }}")
+        return page.evaluate(state)
+
+    start, end = scrub("0"), scrub("1")
+    moved = np.subtract(end["root"], start["root"])
+    assert np.hypot(moved[0], moved[2]) > 0.5  # the character really walked away
+    followed = np.subtract(end["target"], start["target"])
+    assert np.allclose(followed, [moved[0], 0.0, moved[2]], atol=1e-3)  # horizontal only: the camera keeps its height
+    assert np.allclose(np.subtract(end["camera"], start["camera"]), followed, atol=1e-3)
+
+    page.uncheck("#viewer-follow")
+    again = scrub("0")
+    assert np.allclose(again["target"], end["target"]) and np.allclose(again["camera"], end["camera"])
