@@ -7,7 +7,6 @@ differentiable frame stores only particle states (x, v, C, F: 24 floats per part
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -15,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
+from simcore.cores import usable_cores
 from simcore.mpm import kernels as K
 
 
@@ -58,14 +58,6 @@ class SubstepInputs:
 
 
 MAX_CPU_THREADS = 8  # particle passes split over at most this many cores
-
-
-def _usable_cores() -> int:
-    """Cores this process may run on (its affinity mask, e.g. a container's cpuset), else the machine's count."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return os.cpu_count() or 1
 
 
 def warp_device(device: str | None = None) -> str:
@@ -112,7 +104,7 @@ class MPMSolver:
         self.device = warp_device(device)
         cpu = not self.device.startswith("cuda")
         if threads is None:
-            threads = min(_usable_cores(), MAX_CPU_THREADS) if cpu and not requires_grad else 1
+            threads = min(usable_cores(), MAX_CPU_THREADS) if cpu and not requires_grad else 1
         if threads > 1 and (requires_grad or not cpu):
             raise ValueError("threads > 1 is for forward-only CPU solvers (a tape records one thread's launches)")
         self.threads = max(1, min(int(threads), max(int(num_particles), 1)))
