@@ -97,8 +97,9 @@ def _connect_bodies(graph: _JointGraph, order: list[int]) -> int:
 
 
 def _choose_root(pos: np.ndarray, edges: np.ndarray, main: np.ndarray, centre: np.ndarray) -> int:
-    """RigGS root: the junction with the longest tree path to its nearest endpoint (main body only); ties and
-    junction-free bodies go to the joint nearest the centre of mass."""
+    """RigGS root: the junction with the longest tree path to its nearest endpoint (main body only); ties go to
+    the joint nearest the centre of mass. A junction-free body (tube, rope, strip) is rooted at an end, as
+    animators rig chains, not at its middle."""
     n = len(pos)
     if n == 1:
         return 0
@@ -110,9 +111,10 @@ def _choose_root(pos: np.ndarray, edges: np.ndarray, main: np.ndarray, centre: n
     to_leaf = dijkstra(adj, directed=False, indices=leaves, min_only=True)
     to_centre = np.linalg.norm(pos - centre, axis=1)
     junctions = np.flatnonzero((degree >= 3) & main)
-    if len(junctions) == 0:
-        candidates = np.flatnonzero(main)
-        return int(candidates[np.argmin(to_centre[candidates])])
+    if len(junctions) == 0:  # a chain: rooted at its lower end (+Y up), or its back (-Z) end when level
+        ends = np.flatnonzero((degree <= 1) & main) if (degree[main] <= 1).any() else np.flatnonzero(main)
+        span = float(np.ptp(pos[main], axis=0).max()) or 1.0
+        return int(min(ends, key=lambda e: (round(pos[e, 1] / (0.1 * span)), pos[e, 2])))
     # Longest-to-nearest-endpoint first; a 5 % band counts as a tie broken by distance to the centre of mass.
     best = to_leaf[junctions].max()
     near = junctions[to_leaf[junctions] >= 0.95 * best]
@@ -229,6 +231,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     if chain is not None:
         names = ["root"] + [f"joint{k:03d}" for k in range(1, len(chain))]
         parents = np.arange(-1, len(chain) - 1, dtype=np.int64)
+        chain = _pull_tips(chain, parents, params.tip_pull)
         skeleton = Skeleton(chain, parents, names, [JointKind.FREE] * len(chain)).validate()
         return skeleton, {"sheet": True, "joints": skeleton.num_joints, "bodies": 1}
     grid, base, closing = _closed_solid(v, faces, params)
@@ -262,10 +265,9 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     occupied = grid.centers(np.argwhere(np.isin(body_labels, main_labels)))
     root = _choose_root(pos, edges, main, occupied.mean(axis=0))
     order, parents = _rooted_order(len(pos), edges, root, pos)
-    limbs = np.bincount(edges.ravel(), minlength=len(pos)).max(initial=0) >= 3  # a lone chain has no limb tips
-    pos = _pull_tips(pos[order], parents, params.tip_pull if limbs else 0.0)
-    names = ["root"] + [f"joint{k:03d}" for k in range(1, len(order))]
-    skeleton = Skeleton(pos, parents, names, [JointKind.FREE] * len(order)).validate()
+    pos = _pull_tips(pos[order], parents, params.tip_pull)
+    names = ["root"] + [f"joint{k:03d}" for k in range(1, len(pos))]
+    skeleton = Skeleton(pos, parents, names, [JointKind.FREE] * len(pos)).validate()
     report = {
         "resolution": params.resolution,
         "close_radius": closing,

@@ -96,8 +96,23 @@ def test_flat_strip_gets_an_end_to_end_chain_along_its_length():
     faces = np.array([[2 * i, 2 * i + 1, 2 * i + 3] for i in range(4)] + [[2 * i, 2 * i + 3, 2 * i + 2] for i in range(4)])
     skeleton, report = geometric_skeleton(vertices, faces)
     assert report["sheet"] is True
-    np.testing.assert_allclose(skeleton.positions, [[0, 0, 0], [0, 1, 0], [0, 2, 0]], atol=1e-9)
+    # Rooted at the lower end; the last joint is pulled back like a limb tip (where the last part starts).
+    np.testing.assert_allclose(skeleton.positions, [[0, 0, 0], [0, 1, 0], [0, 1.65, 0]], atol=1e-9)
     assert skeleton.parents.tolist() == [-1, 0, 1]
+
+
+@pytest.mark.parametrize(("axis", "label"), [(1, "upright: lower end"), (2, "level: back (-Z) end")])
+def test_a_tube_is_one_chain_rooted_at_an_end(axis: int, label: str):
+    start, end = np.zeros(3), np.zeros(3)
+    start[axis], end[axis] = 0.3, 1.8  # the end with the smaller coordinate must become the root
+    tube = capsule_between(end, start, 0.08)
+    skeleton, _ = geometric_skeleton(tube.vertices, tube.faces)
+    assert skeleton.num_joints >= 3, label
+    assert skeleton.parents.tolist() == list(range(-1, skeleton.num_joints - 1)), label  # one path from the root
+    along = skeleton.positions[:, axis]
+    assert along[0] < 0.3 + 0.1 and np.all(np.diff(along) > 0), label
+    steps = np.diff(along)  # evenly spaced joints, except the tip, pulled back towards its parent
+    assert steps[-1] < 0.8 * np.median(steps[:-1]), label
 
 
 def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
