@@ -66,12 +66,17 @@ def heat_weights(
     # Nearest visible segment per vertex among the CANDIDATES nearest.
     m = min(CANDIDATES, dist.shape[1])
     cand = np.argsort(dist, axis=1)[:, :m]  # (n, m)
-    rows = np.repeat(np.arange(n), m)
-    cs = cand.ravel()
-    bone_pts = heads[cs] + t[rows, cs][:, None] * (tails[cs] - heads[cs])
-    vis = _visible(grid, bone_pts, wv[rows]).reshape(n, m)
+    sorted_d = np.take_along_axis(dist, cand, axis=1)
+    vis = np.zeros((n, m), bool)
+    nearest = np.full(n, np.inf)
+    for k in range(m):  # nearest first; a farther candidate is tested only while it could still be (tied) nearest
+        rows = np.flatnonzero(sorted_d[:, k] <= TIE * nearest + 1e-12)
+        cs = cand[rows, k]
+        bone_pts = heads[cs] + t[rows, cs][:, None] * (tails[cs] - heads[cs])
+        vis[rows, k] = _visible(grid, bone_pts, wv[rows])
+        nearest[rows] = np.where(vis[rows, k], np.minimum(nearest[rows], sorted_d[rows, k]), nearest[rows])
     vis[~vis.any(axis=1), 0] = True  # nothing visible: the nearest bone (Pinocchio's fallback)
-    cand_d = np.where(vis, np.take_along_axis(dist, cand, axis=1), np.inf)
+    cand_d = np.where(vis, sorted_d, np.inf)
     nearest = cand_d.min(axis=1)
     heated = cand_d <= TIE * nearest[:, None] + 1e-12  # (n, m)
 
