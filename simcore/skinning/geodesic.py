@@ -5,10 +5,9 @@ the occupied voxels (26-neighbour graph, Euclidean edge lengths) from every join
 distance never cuts through empty space between the legs or from an arm into the torso. Each joint is a
 super-source node linked to the voxels its segments cross (link length = voxel-centre-to-segment
 distance), and scipy's compiled Dijkstra runs once per joint over that graph; vertices then read the
-distance of the 8 voxel centres around them, and a relaxation sweep along mesh edges adds surface paths.
-Measured (2 cores, xbot: 28k vertices, 67 joints, 31k occupied voxels at 128 per side): Dijkstra for all
-joints ≈ 0.8 s, the per-vertex gathers and the sweep over (V, J) arrays ≈ 1.3 s. One sweep is kept
-(0, 1 or 2 sweeps gave the same dev-set L1 to 0.001); bulky shapes are coarsened to MAX_VOXELS.
+distance of the 8 voxel centres around them. Bulky shapes are coarsened to MAX_VOXELS.
+A Bellman-Ford sweep along mesh edges after the gathers (surface shortcuts) was measured and dropped: dev-set
+L1 0.5347 without it, 0.5353 with one sweep, and it took 0.17 s of xbot's 0.40 s (28k vertices, 67 joints).
 """
 
 from __future__ import annotations
@@ -20,7 +19,6 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from simcore.geometry.laplacian import edges as mesh_edges
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
@@ -88,26 +86,6 @@ def _bone_sources(
     return np.concatenate(out_j), np.concatenate(out_v), np.concatenate(out_d)
 
 
-def _relax_along_edges(dist: np.ndarray, vertices: np.ndarray, faces: np.ndarray, sweeps: int) -> np.ndarray:
-    """Bellman-Ford sweeps d[a] = min(d[a], d[b] + |ab|) over mesh edges (surface shortcuts)."""
-    e = mesh_edges(faces)
-    if len(e) == 0 or sweeps <= 0:
-        return dist
-    a = np.concatenate([e[:, 0], e[:, 1]])
-    b = np.concatenate([e[:, 1], e[:, 0]])
-    length = np.linalg.norm(vertices[a] - vertices[b], axis=1)
-    order = np.argsort(a, kind="stable")
-    a, b, length = a[order], b[order], length[order]
-    starts = np.flatnonzero(np.r_[True, a[1:] != a[:-1]])
-    targets = a[starts]
-    dist = dist.astype(np.float32)  # the (E, J) temporaries dominate: float32 halves them
-    length = length.astype(np.float32)
-    for _ in range(sweeps):
-        best = np.minimum.reduceat(dist[b] + length[:, None], starts, axis=0)
-        dist[targets] = np.minimum(dist[targets], best)
-    return dist.astype(np.float64)
-
-
 def geodesic_distances(
     vertices: np.ndarray,
     faces: np.ndarray,
@@ -115,7 +93,6 @@ def geodesic_distances(
     *,
     resolution: int = RESOLUTION,
     leaf_extension: float = LEAF_EXTENSION,
-    relax_sweeps: int = 1,
     cutoff: float | None = None,
 ) -> np.ndarray:
     """(V, J) float64 geodesic distance (metres) from each vertex to each joint's bone segments, through the solid.
@@ -163,7 +140,6 @@ def geodesic_distances(
         step = np.linalg.norm(wv[has] - grid.centers(nb[has]), axis=1).astype(np.float32)
         dist[has] = np.minimum(dist[has], voxel_dist[vid[has]] + step[:, None])
     dist = dist.astype(np.float64)
-    dist = _relax_along_edges(dist, wv, welded.faces, relax_sweeps)
     lost = ~np.isfinite(dist).any(axis=1)
     if lost.any():
         dist[lost] = joint_distances(wv[lost], joint_segments(skeleton, leaf_extension), j)
