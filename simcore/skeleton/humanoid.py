@@ -15,7 +15,7 @@ confidence. Long medial branches the template leaves out (wings, tails) become S
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -324,6 +324,25 @@ def _facing_label(forward: np.ndarray) -> str:
     return name if name.startswith("-") else "+" + name
 
 
+def _placed(tree: _Tree, biped: _Biped, forward_given: np.ndarray | None, scale: float
+            ) -> tuple[_Biped, dict[str, np.ndarray], np.ndarray, float, float]:
+    """Place the Mixamo body for one detected up axis and fold how far it strays from the medial tree into the
+    biped's confidence (`on_medial_axis`). Returns (biped, joints by name, forward, facing confidence, residual
+    as a share of `scale`); raises _NotBiped when the layout cannot be placed."""
+    lateral = tree.pos[biped.hands[0]] - tree.pos[biped.hands[1]]
+    lateral -= (lateral @ biped.up) * biped.up
+    lateral /= max(np.linalg.norm(lateral), 1e-12)
+    leg_paths = [_up_path(biped.parent, f, stop=biped.pelvis) for f in biped.feet]
+    forward, facing_conf = _facing(tree, biped, leg_paths, lateral, forward_given)
+    joints = _place_body(tree, biped, np.cross(biped.up, forward), forward)
+    names = list(BODY_JOINTS)
+    parents = np.array([names.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in names])
+    residual = fit_residual(tree.pos[tree.nodes], np.asarray([joints[n] for n in names]), parents) / scale
+    checks = {**biped.checks, "on_medial_axis": _soft(residual, 0.0, RESIDUAL_OK, RESIDUAL_SLACK)}
+    scored = replace(biped, checks=checks, confidence=float(np.prod(list(checks.values()))))
+    return scored, joints, forward, facing_conf, residual
+
+
 def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, up_axis: str | None = None,
                  forward_axis: str | None = None, force: bool = False) -> HumanoidFit:
     """Fit the Mixamo skeleton when the mesh is an upright biped.
@@ -347,36 +366,32 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
     if not found:
         report.update(confidence=0.0, reason="no head, two feet and two arms on the medial tree")
         return HumanoidFit(None, report)
-    biped = max(found, key=lambda b: b.confidence)  # max keeps the first (glTF +Y) on ties
-    report.update(confidence=round(biped.confidence, 3), checks={k: round(x, 3) for k, x in biped.checks.items()},
-                  up=_facing_label(biped.up))
-    if biped.confidence < CONFIDENT and not force:
-        report["reason"] = "biped detection below the confidence threshold"
+    scale = float(np.ptp(v, axis=0).max())
+    placed, failures = [], []
+    for b in found:  # each axis's reading is placed and judged by how well its template lies on the body
+        try:
+            placed.append(_placed(tree, b, forward_given, scale))
+        except _NotBiped as exc:
+            failures.append(str(exc))
+    if not placed:
+        best = max(found, key=lambda b: b.confidence)
+        report.update(confidence=round(best.confidence, 3), checks={k: round(x, 3) for k, x in best.checks.items()},
+                      up=_facing_label(best.up), reason=failures[0])
         return HumanoidFit(None, report)
-    lateral = tree.pos[biped.hands[0]] - tree.pos[biped.hands[1]]
-    lateral -= (lateral @ biped.up) * biped.up
-    lateral /= max(np.linalg.norm(lateral), 1e-12)
-    leg_paths = [_up_path(biped.parent, f, stop=biped.pelvis) for f in biped.feet]
-    forward, facing_conf = _facing(tree, biped, leg_paths, lateral, forward_given)
+    # An upside-down reading can pass detection and then strays from the body: the best placed one wins
+    # (max keeps the first, glTF +Y, on ties).
+    biped, joints, forward, facing_conf, residual = max(placed, key=lambda p: p[0].confidence)
     left = np.cross(biped.up, forward)
-    try:
-        joints = _place_body(tree, biped, left, forward)
-    except _NotBiped as exc:
-        report["reason"] = str(exc)
+    report.update(confidence=round(biped.confidence, 3), checks={k: round(x, 3) for k, x in biped.checks.items()},
+                  up=_facing_label(biped.up), residual=round(residual, 4))
+    if biped.confidence < CONFIDENT and not force:
+        report["reason"] = ("the fitted template strays from the medial axis" if biped.checks["on_medial_axis"] < 1.0
+                            else "biped detection below the confidence threshold")
         return HumanoidFit(None, report)
     names = list(BODY_JOINTS)
     positions = [joints[n] for n in names]
     kinds = [JointKind.BODY] * len(names)
     parents = [names.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in names]
-    scale = float(np.ptp(v, axis=0).max())
-    residual = fit_residual(tree.pos[tree.nodes], np.asarray(positions), np.asarray(parents)) / scale
-    biped.checks["on_medial_axis"] = _soft(residual, 0.0, RESIDUAL_OK, RESIDUAL_SLACK)
-    biped.confidence = float(np.prod(list(biped.checks.values())))
-    report.update(confidence=round(biped.confidence, 3), checks={k: round(x, 3) for k, x in biped.checks.items()},
-                  residual=round(residual, 4))
-    if biped.confidence < CONFIDENT and not force:
-        report["reason"] = "the fitted template strays from the medial axis"
-        return HumanoidFit(None, report)
     fingers: dict[str, np.ndarray] | None = None
     if max_joints >= len(BODY_JOINTS) + len(HAND_JOINTS):
         fingers, finger_report = fit_fingers(v, faces, joints, biped.up, forward, left)

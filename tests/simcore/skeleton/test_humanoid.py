@@ -117,3 +117,14 @@ def test_template_placed_off_the_body_falls_back_to_geometric(monkeypatch):
     assert fit.skeleton is None and fit.report["checks"]["on_medial_axis"] < 0.5
     assert predict_skeleton(vertices, faces, method="auto").method == "geometric"
     assert fit_humanoid(vertices, faces, force=True).skeleton is not None
+
+
+def test_a_short_torso_z_up_character_is_fitted_upright_not_upside_down(dev_assets):
+    # RobotExpressive lies in a Z-up bind space with a head as tall as its torso and legs. Read upside down its
+    # layout passes detection better than upright, but the template placed that way strays from the body.
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / "robot_expressive.glb").read_bytes()))
+    fit = fit_humanoid(rig.vertices, rig.faces, force=True)
+    assert fit.skeleton is not None
+    assert fit.report["up"] == "+z" and fit.report["checks"]["on_medial_axis"] == 1.0, fit.report
+    head, hips = joint(fit.skeleton, "Head"), joint(fit.skeleton, "Hips")
+    assert head[2] > hips[2]
