@@ -114,7 +114,8 @@ def _choose_root(pos: np.ndarray, edges: np.ndarray, main: np.ndarray, centre: n
     if len(junctions) == 0:  # a chain: rooted at its lower end (+Y up), or its back (-Z) end when level
         ends = np.flatnonzero((degree <= 1) & main) if (degree[main] <= 1).any() else np.flatnonzero(main)
         span = float(np.ptp(pos[main], axis=0).max()) or 1.0
-        return int(min(ends, key=lambda e: (round(pos[e, 1] / (0.1 * span)), pos[e, 2])))
+        low = ends[pos[ends, 1] < pos[ends, 1].min() + 0.1 * span]  # within a tenth of the length of the lowest
+        return int(low[np.argmin(pos[low, 2])])
     # Longest-to-nearest-endpoint first; a 5 % band counts as a tie broken by distance to the centre of mass.
     best = to_leaf[junctions].max()
     near = junctions[to_leaf[junctions] >= 0.95 * best]
