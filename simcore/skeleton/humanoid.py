@@ -49,6 +49,7 @@ TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (0.575 on Mixa
 # Mean distance of the placed body bones from the medial tree, × the mesh's longest side: up to RESIDUAL_OK the
 # template lies along the body (dev humanoids: 0.006-0.014); RESIDUAL_SLACK further on, the check reaches 0.
 RESIDUAL_OK, RESIDUAL_SLACK = 0.015, 0.01
+_BODY_PARENT_INDEX = [BODY_JOINTS.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in BODY_JOINTS]
 
 
 @dataclass
@@ -335,9 +336,8 @@ def _placed(tree: _Tree, biped: _Biped, forward_given: np.ndarray | None, scale:
     leg_paths = [_up_path(biped.parent, f, stop=biped.pelvis) for f in biped.feet]
     forward, facing_conf = _facing(tree, biped, leg_paths, lateral, forward_given)
     joints = _place_body(tree, biped, np.cross(biped.up, forward), forward)
-    names = list(BODY_JOINTS)
-    parents = np.array([names.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in names])
-    residual = fit_residual(tree.pos[tree.nodes], np.asarray([joints[n] for n in names]), parents) / scale
+    positions = np.asarray([joints[n] for n in BODY_JOINTS])
+    residual = fit_residual(tree.pos[tree.nodes], positions, np.asarray(_BODY_PARENT_INDEX)) / scale
     checks = {**biped.checks, "on_medial_axis": _soft(residual, 0.0, RESIDUAL_OK, RESIDUAL_SLACK)}
     scored = replace(biped, checks=checks, confidence=float(np.prod(list(checks.values()))))
     return scored, joints, forward, facing_conf, residual
@@ -391,7 +391,7 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
     names = list(BODY_JOINTS)
     positions = [joints[n] for n in names]
     kinds = [JointKind.BODY] * len(names)
-    parents = [names.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in names]
+    parents = list(_BODY_PARENT_INDEX)
     fingers: dict[str, np.ndarray] | None = None
     if max_joints >= len(BODY_JOINTS) + len(HAND_JOINTS):
         fingers, finger_report = fit_fingers(v, faces, joints, biped.up, forward, left)
