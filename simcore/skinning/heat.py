@@ -68,13 +68,14 @@ def heat_weights(
     cand = np.argsort(dist, axis=1)[:, :m]  # (n, m)
     sorted_d = np.take_along_axis(dist, cand, axis=1)
     vis = np.zeros((n, m), bool)
-    nearest = np.full(n, np.inf)
+    seen = np.full(n, np.inf)  # distance of the nearest visible candidate found so far
     for k in range(m):  # nearest first; a farther candidate is tested only while it could still be (tied) nearest
-        rows = np.flatnonzero(sorted_d[:, k] <= TIE * nearest + 1e-12)
+        rows = np.flatnonzero(sorted_d[:, k] <= TIE * seen + 1e-12)
         cs = cand[rows, k]
         bone_pts = heads[cs] + t[rows, cs][:, None] * (tails[cs] - heads[cs])
         vis[rows, k] = _visible(grid, bone_pts, wv[rows])
-        nearest[rows] = np.where(vis[rows, k], np.minimum(nearest[rows], sorted_d[rows, k]), nearest[rows])
+        hit = rows[vis[rows, k]]
+        seen[hit] = np.minimum(seen[hit], sorted_d[hit, k])
     vis[~vis.any(axis=1), 0] = True  # nothing visible: the nearest bone (Pinocchio's fallback)
     cand_d = np.where(vis, sorted_d, np.inf)
     nearest = cand_d.min(axis=1)

@@ -68,8 +68,8 @@ def test_duplicate_vertices_get_identical_weights(bent_tube) -> None:
     _dominant_joint_near_bones(flat_v, skeleton, w)
 
 
-def test_geodesic_distance_goes_around_not_across_a_gap() -> None:
-    """A U-shaped tube: the straight line between the arms crosses empty space, the geodesic must not."""
+def _u_tube() -> trimesh.Trimesh:
+    """Two upright arms (x = ±0.6, radius 0.2, z in ±1.2) joined by a base at z = -1: a 0.8 m gap between them."""
     arms = []
     for x in (-0.6, 0.6):
         arm = trimesh.creation.capsule(height=2.0, radius=0.2, count=[12, 12])
@@ -78,13 +78,31 @@ def test_geodesic_distance_goes_around_not_across_a_gap() -> None:
     base = trimesh.creation.capsule(height=1.2, radius=0.2, count=[12, 12])
     base.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))
     base.apply_translation([0.0, 0.0, -1.0])
-    mesh = trimesh.util.concatenate(arms + [base])
+    return trimesh.util.concatenate(arms + [base])
+
+
+def test_geodesic_distance_goes_around_not_across_a_gap() -> None:
+    """A U-shaped tube: the straight line between the arms crosses empty space, the geodesic must not."""
+    mesh = _u_tube()
     skeleton = Skeleton(np.array([[-0.6, 0.0, -0.9], [-0.6, 0.0, 0.9]]), np.array([-1, 0]), ["left", "left_tip"])
     d = geodesic_distances(mesh.vertices, mesh.faces, skeleton, leaf_extension=0.0)
     right_top = np.flatnonzero((mesh.vertices[:, 0] > 0.7) & (mesh.vertices[:, 2] > 0.8))
     assert len(right_top) > 0
     # Straight line from the right arm's top to the left bone ≈ 1.2 m; through the U it is ≥ 1.8 m.
     assert d[right_top, 0].min() > 1.8
+
+
+def test_heat_skips_a_nearer_bone_hidden_across_a_gap() -> None:
+    """The right arm's bone stops low, so the left arm's bone is nearer in a straight line to the right arm's top;
+    that line crosses the gap, so bone heat must heat the top from the right bone (visible along the arm)."""
+    mesh = _u_tube()
+    joints = np.array([[0.0, 0.0, -1.0], [-0.6, 0.0, -0.9], [-0.6, 0.0, 0.9], [0.6, 0.0, -0.9], [0.6, 0.0, -0.5]])
+    skeleton = Skeleton(joints, np.array([-1, 0, 1, 0, 3]), ["root", "left", "left_tip", "right", "right_tip"])
+    weights = compute_weights(mesh.vertices, mesh.faces, skeleton, method="heat", smooth_iterations=0).weights.toarray()
+    top = np.flatnonzero((mesh.vertices[:, 0] > 0.3) & (mesh.vertices[:, 2] > 0.9))
+    assert len(top) > 10
+    left_side = weights[top][:, [1, 2]].sum(axis=1)  # the left arm's joints
+    assert left_side.max() < 0.05, left_side.max()
 
 
 def test_rejects_bad_input(bent_tube) -> None:
