@@ -105,6 +105,8 @@ def compute_weights(
     scores: dict[str, dict[str, float]] = {}
     # The methods are independent and spend most of their time in numpy/scipy calls that release the GIL:
     # on 2 cores `auto` takes 0.79 s instead of 1.15 s for brainstem (34k vertices; median of 5), the same for small meshes.
+    # Cost: both methods' (V, J) arrays live at once; bench/skinning.py (66k vertices, 60 joints) peaks 670-690 MB
+    # instead of 566 MB.
     with ThreadPoolExecutor(max_workers=max(1, min(len(chosen), usable_cores()))) as pool:
         futures = {pool.submit(run, name): name for name in chosen}
         for done, future in enumerate(as_completed(futures), start=1):
