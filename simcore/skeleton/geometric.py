@@ -39,6 +39,8 @@ class GeometricParams:
     close_drop: float = 0.25  # ...and kept when it shortens the medial axis by more than this share
     close_inside: float = 0.97  # ...with at least this share of it inside the lightly closed solid (no bridging)
     sheet_ratio: float = 0.02  # thinner than this × the length: a flat sheet, rigged as a principal-axis chain
+    tube_ratio: float = 2.0  # a junction-free body (tube) gets no segment shorter than this × its diameter
+    root_push: float = 0.5  # a chain's root moves this share of its medial radius outwards, towards the end
 
 
 @dataclass
@@ -54,6 +56,8 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
     adjacency, pos, rad = forest.adjacency, forest.positions, forest.radius
     keys, brs = branches(adjacency, nodes)
     rep, merged, brs = merge_junctions(keys, brs, adjacency, pos, rad, params.merge_ratio)
+    if len(brs) == 1:  # a tube (no junction): like a sheet, it bends only where segments are longer than it is thick
+        spacing = max(spacing, params.tube_ratio * 2.0 * float(np.max(rad[brs[0].nodes])))
     base = len(graph.positions)
     slot: dict[int, int] = {}
     for r in sorted(set(rep.values())):
@@ -154,6 +158,12 @@ def _pull_tips(pos: np.ndarray, parents: np.ndarray, share: float) -> np.ndarray
     leaves = np.flatnonzero(~has_child & (parents >= 0))
     out[leaves] += share * (pos[parents[leaves]] - pos[leaves])
     return out
+
+
+def _extend_end(end: np.ndarray, inner: np.ndarray, distance: float) -> np.ndarray:
+    """(3,) `end` moved `distance` further along the direction from `inner` to `end`."""
+    step = end - inner
+    return end + distance * step / max(float(np.linalg.norm(step)), 1e-12)
 
 
 def sheet_chain(vertices: np.ndarray, ratio: float, spacing: float, max_joints: int) -> np.ndarray | None:
@@ -267,6 +277,9 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     root = _choose_root(pos, edges, main, occupied.mean(axis=0))
     order, parents = _rooted_order(len(pos), edges, root, pos)
     pos = _pull_tips(pos[order], parents, params.tip_pull)
+    if np.count_nonzero(parents == 0) == 1:  # a chain's root is its end: thinning stopped a radius short of it
+        depth = base.radius[int(np.argmin(np.linalg.norm(base.positions - pos[0], axis=1)))]
+        pos[0] = _extend_end(pos[0], pos[np.flatnonzero(parents == 0)[0]], params.root_push * depth)
     names = ["root"] + [f"joint{k:03d}" for k in range(1, len(pos))]
     skeleton = Skeleton(pos, parents, names, [JointKind.FREE] * len(pos)).validate()
     report = {

@@ -115,6 +115,21 @@ def test_a_tube_is_one_chain_rooted_at_an_end(axis: int, label: str):
     assert steps[-1] < 0.8 * np.median(steps[:-1]), label
 
 
+def test_a_stubby_tube_bends_only_where_segments_are_longer_than_it_is_thick():
+    # RiggedSimple's proportions: 5 diameters long. Even 0.12-length spacing gave it 8 bones; two are what bends.
+    tube = capsule_between(np.array([0.0, 0.3, 0.0]), np.array([0.0, 1.9, 0.0]), 0.2)
+    from simcore.skeleton.geometric import GeometricParams
+
+    skeleton, _ = geometric_skeleton(tube.vertices, tube.faces)
+    assert skeleton.num_joints == 3
+    # Thinning stops about a radius inside the cap; the chain's root is pushed half a radius out, towards the end.
+    flush, _ = geometric_skeleton(tube.vertices, tube.faces, params=GeometricParams(root_push=0.0))
+    np.testing.assert_allclose(skeleton.positions[1:], flush.positions[1:])
+    drop = flush.positions[0, 1] - skeleton.positions[0, 1]
+    assert 0.05 < drop < 0.15
+    assert skeleton.positions[0, 1] > 0.1  # still inside the mesh (the cap's tip is at y = 0.1)
+
+
 def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
     vertices, faces, _, pulled, _ = dog
     from simcore.skeleton.geometric import GeometricParams
