@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 from simcore.errors import InvalidInput, LimitExceeded
 from simcore.geometry.mesh import IngestedMesh
 from simcore.geometry.mesh_stats import mesh_stats
+from simcore.geometry.referenced import referenced_mesh
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
 from simcore.io.gltf_static import bake_static_glb, static_arrays
@@ -118,7 +119,7 @@ def ingest(data: bytes, fmt: str, *, up_axis: str | None = None, units: str = "a
     else:
         raw_vertices, raw_faces, geoms = _load_other(data, fmt)
     _check(raw_vertices, raw_faces, max_vertices)
-    extents = np.ptp(raw_vertices, axis=0)
+    extents = np.ptp(referenced_mesh(raw_vertices, raw_faces).vertices, axis=0)  # stray vertices set no size
     up_guess = guess_up_axis(fmt, extents)
     unit_guess = guess_units(float(extents.max()))
     up = up_axis or up_guess

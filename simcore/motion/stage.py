@@ -79,6 +79,7 @@ def clip_from_mesh_upload(state: "PipelineState") -> MotionClip | None:
 
 def motion_report(state: "PipelineState", clip: MotionClip, result: Any) -> dict[str, Any]:
     """JSON-ready report["motion"]: mapping, clip facts and LBS quality scores."""
+    from simcore.geometry.referenced import referenced_mesh
     from simcore.motion.quality import foot_sliding, self_penetration, skin_matrices
 
     anim = result.animation
@@ -100,8 +101,10 @@ def motion_report(state: "PipelineState", clip: MotionClip, result: Any) -> dict
     }
     if state.weights is not None and state.mesh is not None:
         mats = skin_matrices(state.skeleton, anim)
-        out["foot_sliding"] = foot_sliding(state.mesh.vertices, state.weights, mats, anim.fps)
-        out["self_penetration"] = self_penetration(state.skeleton, state.mesh.vertices, state.weights, mats)
+        used = referenced_mesh(state.mesh.vertices, state.mesh.faces).ids  # stray vertices would move the ground
+        vertices, weights = state.mesh.vertices[used], state.weights[used]
+        out["foot_sliding"] = foot_sliding(vertices, weights, mats, anim.fps)
+        out["self_penetration"] = self_penetration(state.skeleton, vertices, weights, mats)
     return out
 
 

@@ -15,13 +15,15 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from simcore.geometry.referenced import referenced_mesh
 from simcore.geometry.voxelize import solid_voxels, surface_samples
 
 
 @dataclass
 class ParticleSample:
     """positions: (N, 3) float64 rest positions, metres.
-    vertex_particles: (V,) int64 particle index of each mesh vertex, -1 for vertices thinned by the budget.
+    vertex_particles: (V,) int64 particle index of each mesh vertex, -1 for vertices thinned by the budget
+                      and for vertices no face uses.
     volume: solid volume, m³; particle_volume: volume / N, m³.
     counts: particles by origin after the budget ("interior", "surface", "vertices"); notes: what was thinned.
     """
@@ -49,7 +51,8 @@ def sample_volume(vertices: np.ndarray, faces: np.ndarray, spacing: float, *, pe
     vertices: (V, 3) float, faces: (F, 3) int. Voxels have edge 2·spacing with `per_voxel` random points each
     (8: about two per axis). Deterministic for a given seed.
     """
-    v = np.asarray(vertices, dtype=np.float64)
+    mesh = referenced_mesh(vertices, faces)  # vertices no face uses get no particle and set no size
+    v, faces = mesh.vertices, mesh.faces
     rng = np.random.default_rng(seed)
     pitch = 2.0 * float(spacing)
     extent = float((v.max(axis=0) - v.min(axis=0)).max())
@@ -70,7 +73,7 @@ def sample_volume(vertices: np.ndarray, faces: np.ndarray, spacing: float, *, pe
     surface = surface[_thin(rng, len(surface), int(np.ceil(area / spacing**2)))]
 
     notes: list[str] = []
-    vkeep = np.arange(len(v))
+    vkeep = np.arange(len(v))  # into the referenced vertices
     if max_particles is not None:
         if len(v) > max_particles // 2:
             vkeep = _thin(rng, len(v), max_particles // 2)
@@ -90,8 +93,8 @@ def sample_volume(vertices: np.ndarray, faces: np.ndarray, spacing: float, *, pe
     points, origin_of = points[order], origin_of[order]
     rank = np.empty(len(order), np.int64)
     rank[order] = np.arange(len(order))
-    vertex_particles = np.full(len(v), -1, np.int64)
-    vertex_particles[vkeep] = rank[len(interior) + len(surface):]
+    vertex_particles = np.full(mesh.count, -1, np.int64)
+    vertex_particles[mesh.ids[vkeep]] = rank[len(interior) + len(surface):]
     counts = {"interior": int(np.sum(origin_of == 0)), "surface": int(np.sum(origin_of == 1)), "vertices": int(len(vkeep))}
     return ParticleSample(points, vertex_particles, volume, volume / max(len(points), 1), counts, notes)
 

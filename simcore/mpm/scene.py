@@ -17,6 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
+from simcore.geometry.referenced import referenced_mesh
 from simcore.mpm.drivers import (DrivingPoints, animation_world_transforms, driver_positions, leaf_tips, place_drivers,
                                   substep_drive)
 from simcore.mpm.materials import PRESETS, max_wave_speed, particle_lame, prototype_weights, region_stiffness, seed_prototypes
@@ -118,7 +119,9 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
     world = animation_world_transforms(skeleton, animation)
     bind_world = bind_matrices(skeleton)
     lbs = linear_blend(vertices, weights, skinning_matrices(skeleton, world))
-    boxes = np.concatenate([np.stack([vertices.min(0), vertices.max(0)])[None], np.stack([lbs.min(1), lbs.max(1)], axis=1)])
+    used = referenced_mesh(vertices, faces).ids  # vertices no face uses must not widen the domain
+    surface, moving = vertices[used], lbs[:, used]
+    boxes = np.concatenate([np.stack([surface.min(0), surface.max(0)])[None], np.stack([moving.min(1), moving.max(1)], axis=1)])
     extent = float((boxes[:, 1] - boxes[:, 0]).max())
     dx = extent / (grid - 2 * (BOUND + MARGIN_NODES))
     centres = 0.5 * (boxes[1:, 0] + boxes[1:, 1])
@@ -133,7 +136,7 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
         stiffness = region_stiffness(pw, skeleton.names, opts.bone_stiffness)
     mu, lam = particle_lame(prototype_weights(sample.positions, protos), protos, stiffness)
 
-    drivers = place_drivers(skeleton, opts.drivers, dx, tips=leaf_tips(skeleton, vertices, weights))
+    drivers = place_drivers(skeleton, opts.drivers, dx, tips=leaf_tips(skeleton, surface, weights[used]))
     frame_dt = 1.0 / float(animation.fps)
     dt_paper = (1.0 / PAPER_FPS) / opts.substeps
     dt_wave = CFL_WAVE * dx / max_wave_speed(protos, material.density, stiffness)

@@ -9,6 +9,7 @@ from typing import Any, Literal
 import numpy as np
 
 from simcore.errors import InvalidInput
+from simcore.geometry.referenced import referenced_mesh
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.types import Skeleton
 
@@ -26,6 +27,7 @@ class SkeletonPrediction:
 
 
 def _check_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Validated (vertices, faces), restricted to the vertices some face uses (same frame, so the skeleton is too)."""
     v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     if len(v) == 0 or len(f) == 0:
@@ -34,9 +36,10 @@ def _check_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np
         raise InvalidInput("the mesh has non-finite vertex positions", code="invalid_mesh", field="mesh")
     if f.min() < 0 or f.max() >= len(v):
         raise InvalidInput("a face indexes a vertex that does not exist", code="invalid_mesh", field="mesh")
-    if float(np.ptp(v, axis=0).max()) <= 0:
+    mesh = referenced_mesh(v, f)  # vertices no face uses must not set the size or the solid
+    if float(np.ptp(mesh.vertices, axis=0).max()) <= 0:
         raise InvalidInput("the mesh has zero extent", code="invalid_mesh", field="mesh")
-    return v, f
+    return mesh.vertices, mesh.faces
 
 
 def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "auto", max_joints: int = 64,

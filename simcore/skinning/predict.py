@@ -10,10 +10,12 @@ from typing import Literal
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
 from simcore.cores import usable_cores
 from simcore.errors import InvalidInput, LimitExceeded
 from simcore.geometry.laplacian import adjacency
+from simcore.geometry.referenced import ReferencedMesh, referenced_mesh
 from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.geodesic import geodesic_weights
@@ -82,6 +84,8 @@ def compute_weights(
     if method != "auto" and method not in METHODS:
         raise InvalidInput(f"unknown skinning method {method!r}; use auto, geodesic or heat", code="invalid_option", field="skinning")
     v, f = _check_inputs(vertices, faces, skeleton, max_influences)
+    mesh = referenced_mesh(v, f)  # vertices no face uses would stretch the voxel grid; they get weights at the end
+    v, f = mesh.vertices, mesh.faces
     report = progress or (lambda fraction: None)
     welded = weld_vertices(v, f)
     adj = adjacency(welded.faces, len(welded.vertices))
@@ -114,4 +118,16 @@ def compute_weights(
             results[name], scores[name] = future.result()
             report(done / len(chosen))
     best = min(chosen, key=lambda name: scores[name]["score"])
-    return SkinningResult(results[best], best, scores)
+    return SkinningResult(_all_vertices(results[best], mesh, np.asarray(vertices, dtype=np.float64)), best, scores)
+
+
+def _all_vertices(weights: sp.csr_matrix, mesh: ReferencedMesh, vertices: np.ndarray) -> sp.csr_matrix:
+    """(V, J) weights of every vertex from those of the referenced ones (U, J): an unreferenced vertex takes
+    the row of the nearest referenced vertex, so it follows the surface around it."""
+    if mesh.complete:
+        return weights
+    source = np.empty(mesh.count, dtype=np.int64)
+    source[mesh.ids] = np.arange(len(mesh.ids))
+    stray = np.setdiff1d(np.arange(mesh.count), mesh.ids)
+    source[stray] = cKDTree(mesh.vertices).query(vertices[stray])[1]
+    return weights[source].tocsr()

@@ -22,7 +22,8 @@ def _state(tmp_path: Path, motion: Path | None = None, fmt: str | None = None, *
     skel = humanoid()
     vertices, weights = body_cloud(skel)
     state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb", motion, fmt), JobOptions(motion=motion_options), tmp_path)
-    state.mesh = IngestedMesh(vertices, np.zeros((0, 3), np.int64), b"")
+    soup = np.resize(np.arange(len(vertices)), (-(-len(vertices) // 3), 3))  # triangles over the cloud: every point is used
+    state.mesh = IngestedMesh(vertices, soup, b"")
     state.skeleton, state.weights = skel, weights
     return state
 
