@@ -92,7 +92,9 @@ def heat_weights(
     area = np.where(area > 0, area, max(float(area[area > 0].mean()) if (area > 0).any() else 1.0, 1e-12))
     # Multiply Baran's −Δ + H by the lumped areas: symmetric, positive definite (H > 0 everywhere).
     system = (-cotangent_laplacian(wv, wf) + sp.diags(area * h)).tocsc()
-    solve = splu(system, permc_spec="MMD_AT_PLUS_A")
+    # COLAMD ordering: the same solution (within 1e-14 on the dev rigs) as MMD on A+Aᵀ, whose ordering step
+    # blows up on big meshes (442k vertices: 51 s against 4.5 s to factorise; 28k: 1.5 s against 0.09 s).
+    solve = splu(system, permc_spec="COLAMD")
     w = solve.solve((area * h)[:, None] * p)
     w = np.clip(w, 0.0, 1.0)
     w[w < min_weight] = 0.0
