@@ -30,6 +30,9 @@ METHODS: dict[str, Callable[[np.ndarray, np.ndarray, Skeleton], np.ndarray]] = {
 }
 MAX_VERTICES = 2_000_000
 MAX_JOINTS = 1024
+# The methods hold dense (vertices × joints) arrays: bench/skinning.py peaks at 3.7 GB for 530k × 60 (about
+# 115 bytes per entry), so 100M entries is ~11.5 GB, what one job may take of a 24 GB, 2-worker machine.
+MAX_ENTRIES = 100_000_000
 SMOOTH_STRENGTH = 0.25  # per pass; 2 passes: dev-set L1 0.474 vs 0.487 unsmoothed (0.5 per pass hurt: artist weights are sharp)
 
 
@@ -60,6 +63,9 @@ def _check_inputs(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, m
     skeleton.validate()
     if skeleton.num_joints > MAX_JOINTS:
         raise LimitExceeded(f"{skeleton.num_joints} joints is over the skinning limit of {MAX_JOINTS}", code="too_many_joints", field="skeleton")
+    if len(v) * skeleton.num_joints > MAX_ENTRIES:
+        raise LimitExceeded(f"{len(v)} vertices × {skeleton.num_joints} joints is over the skinning limit of {MAX_ENTRIES:,} "
+                            "weights; lower max_joints or decimate the mesh", code="too_large_to_skin", field="mesh")
     if max_influences < 1:
         raise InvalidInput("max_influences must be at least 1", code="invalid_option", field="max_influences")
     return v, f.astype(np.int64)

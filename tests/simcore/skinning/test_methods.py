@@ -115,6 +115,19 @@ def test_rejects_bad_input(bent_tube) -> None:
     assert err.value.field == "skinning"
 
 
+def test_refuses_more_weights_than_memory_allows(bent_tube, monkeypatch) -> None:
+    """Dense (vertices × joints) arrays would be OOM-killed (three lost attempts, no reason): refuse up front."""
+    from simcore.errors import LimitExceeded
+    from simcore.skinning import predict
+
+    v, f, skeleton = bent_tube
+    monkeypatch.setattr(predict, "MAX_ENTRIES", len(v) * skeleton.num_joints - 1)
+    with pytest.raises(LimitExceeded) as err:
+        compute_weights(v, f, skeleton)
+    assert err.value.code == "too_large_to_skin" and err.value.field == "mesh"
+    assert "max_joints" in str(err.value)
+
+
 @pytest.mark.parametrize("method", ["geodesic", "heat"])
 def test_floating_part_and_single_joint_still_get_weights(bent_tube, method: str) -> None:
     """A detached sphere far from every bone (an accessory) is weighted too; a one-joint skeleton works."""
