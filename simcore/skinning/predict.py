@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -13,7 +14,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from simcore.cores import usable_cores
-from simcore.errors import InvalidInput, LimitExceeded
+from simcore.errors import Canceled, InvalidInput, LimitExceeded
 from simcore.geometry.laplacian import adjacency
 from simcore.geometry.referenced import ReferencedMesh, referenced_mesh
 from simcore.geometry.weld import weld_vertices
@@ -24,7 +25,7 @@ from simcore.skinning.postprocess import smooth_on_surface, top_k
 from simcore.skinning.quality import quality_scores
 
 Method = Literal["auto", "geodesic", "heat"]
-METHODS: dict[str, Callable[[np.ndarray, np.ndarray, Skeleton], np.ndarray]] = {
+METHODS: dict[str, Callable[..., np.ndarray]] = {  # (vertices, faces, skeleton, *, progress) -> (V, J) weights
     "geodesic": geodesic_weights,
     "heat": heat_weights,
 }
@@ -33,6 +34,7 @@ MAX_JOINTS = 1024
 # The methods hold dense (vertices × joints) arrays: bench/skinning.py peaks at 3.7 GB for 530k × 60 (about
 # 115 bytes per entry), so 100M entries is ~11.5 GB, what one job may take of a 24 GB, 2-worker machine.
 MAX_ENTRIES = 100_000_000
+PROGRESS_POLL_S = 0.25  # how often `auto`'s caller hears the methods' progress (and can cancel)
 SMOOTH_STRENGTH = 0.25  # per pass; 2 passes: dev-set L1 0.474 vs 0.487 unsmoothed (0.5 per pass hurt: artist weights are sharp)
 
 
@@ -97,34 +99,63 @@ def compute_weights(
     adj = adjacency(welded.faces, len(welded.vertices))
     first = np.unique(welded.index, return_index=True)[1]  # one original vertex per welded vertex
 
-    def run(name: str) -> tuple[sp.csr_matrix, dict[str, float]]:
+    def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
-        dense = METHODS[name](v, f, skeleton)
+        dense = METHODS[name](v, f, skeleton, progress=lambda fraction: step(0.8 * fraction))
         # Smooth on the welded surface so seam duplicates stay identical, then map back.
         on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
         on_welded[welded.index] = dense
         dense = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH)[welded.index]
         weights = top_k(dense, max_influences)
         seconds = time.perf_counter() - started
+        step(0.9)
         scores = quality_scores(welded.vertices, welded.faces, skeleton, weights[first])
         scores["seconds"] = round(seconds, 3)
+        step(1.0)
         return weights, scores
 
     chosen = list(METHODS) if method == "auto" else [method]
     results: dict[str, sp.csr_matrix] = {}
     scores: dict[str, dict[str, float]] = {}
+    tracker = _MethodProgress(chosen)
     # The methods are independent and spend most of their time in numpy/scipy calls that release the GIL:
     # on 2 cores `auto` takes 0.79 s instead of 1.15 s for brainstem (34k vertices; median of 5), the same for small meshes.
     # Cost: both methods' (V, J) arrays live at once; bench/skinning.py (66k vertices, 60 joints) peaks 670-690 MB
     # instead of 566 MB.
     with ThreadPoolExecutor(max_workers=max(1, min(len(chosen), usable_cores()))) as pool:
-        futures = {pool.submit(run, name): name for name in chosen}
-        for done, future in enumerate(as_completed(futures), start=1):
-            name = futures[future]
-            results[name], scores[name] = future.result()
-            report(done / len(chosen))
+        futures = {pool.submit(run, name, tracker.updater(name)): name for name in chosen}
+        pending = set(futures)
+        try:
+            while pending:  # only this thread calls `report` (it may write to the job's database row, or cancel)
+                done, pending = wait(pending, timeout=PROGRESS_POLL_S, return_when=FIRST_COMPLETED)
+                for future in done:
+                    results[futures[future]], scores[futures[future]] = future.result()
+                report(tracker.overall())
+        except BaseException:
+            tracker.stop.set()  # the other method stops at its next checkpoint instead of running on
+            raise
     best = min(chosen, key=lambda name: scores[name]["score"])
     return SkinningResult(_all_vertices(results[best], mesh, np.asarray(vertices, dtype=np.float64)), best, scores)
+
+
+class _MethodProgress:
+    """Each method's fraction done, written by its worker thread and read by the caller's thread; once `stop`
+    is set, a method raises Canceled at its next checkpoint."""
+
+    def __init__(self, names: list[str]):
+        self.fractions = dict.fromkeys(names, 0.0)
+        self.stop = threading.Event()
+
+    def updater(self, name: str) -> Callable[[float], None]:
+        def update(fraction: float) -> None:
+            if self.stop.is_set():
+                raise Canceled("skinning stopped: the other method failed or the job was canceled")
+            self.fractions[name] = fraction
+
+        return update
+
+    def overall(self) -> float:
+        return sum(self.fractions.values()) / len(self.fractions)
 
 
 def _all_vertices(weights: sp.csr_matrix, mesh: ReferencedMesh, vertices: np.ndarray) -> sp.csr_matrix:

@@ -128,6 +128,35 @@ def test_refuses_more_weights_than_memory_allows(bent_tube, monkeypatch) -> None
     assert "max_joints" in str(err.value)
 
 
+def test_auto_reports_progress_while_the_methods_run(bent_tube, monkeypatch) -> None:
+    from simcore.skinning import predict
+
+    monkeypatch.setattr(predict, "PROGRESS_POLL_S", 0.0)  # hear every checkpoint
+    v, f, skeleton = bent_tube
+    seen: list[float] = []
+    compute_weights(v, f, skeleton, method="auto", progress=seen.append)
+    assert seen == sorted(seen) and seen[-1] == 1.0
+    assert len(set(seen)) > 3  # checkpoints inside the methods, not one step per finished method
+
+
+def test_cancel_stops_both_methods(bent_tube, monkeypatch) -> None:
+    from simcore.errors import Canceled
+    from simcore.skinning import geodesic, predict
+
+    monkeypatch.setattr(predict, "PROGRESS_POLL_S", 0.0)
+    finished: list[bool] = []
+    falloff = geodesic.falloff_weights
+    monkeypatch.setattr(geodesic, "falloff_weights", lambda *a, **k: finished.append(True) or falloff(*a, **k))
+
+    def cancel(fraction: float) -> None:
+        raise Canceled("the job was canceled")
+
+    v, f, skeleton = bent_tube
+    with pytest.raises(Canceled):
+        compute_weights(v, f, skeleton, method="auto", progress=cancel)
+    assert not finished  # the geodesic method stopped at a checkpoint instead of running to the end
+
+
 @pytest.mark.parametrize("method", ["geodesic", "heat"])
 def test_floating_part_and_single_joint_still_get_weights(bent_tube, method: str) -> None:
     """A detached sphere far from every bone (an accessory) is weighted too; a one-joint skeleton works."""
