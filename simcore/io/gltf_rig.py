@@ -17,6 +17,9 @@ from simcore.io.gltf_document import GltfDocument
 from simcore.skeleton.types import Skeleton
 
 MODES_TRIANGLES = 4
+MODES_TRIANGLE_STRIP = 5
+MODES_TRIANGLE_FAN = 6
+TRIANGLE_MODES = (MODES_TRIANGLES, MODES_TRIANGLE_STRIP, MODES_TRIANGLE_FAN)
 
 
 @dataclass
@@ -41,18 +44,29 @@ class RiggedAsset:
 
 
 def primitive_triangles(doc: GltfDocument, prim: dict, vertex_count: int) -> np.ndarray:
-    """(F, 3) int64 triangles of a primitive (indexed or not); non-triangle modes give (0, 3)."""
-    if prim.get("mode", MODES_TRIANGLES) != MODES_TRIANGLES:
+    """(F, 3) int64 triangles of a primitive (indexed or not): triangle lists, strips and fans (strips keep a
+    consistent winding, degenerate triangles are dropped); points and lines give (0, 3)."""
+    mode = prim.get("mode", MODES_TRIANGLES)
+    if mode not in TRIANGLE_MODES:
         return np.zeros((0, 3), np.int64)
     if "indices" in prim:
         idx = doc.accessor(prim["indices"]).reshape(-1).astype(np.int64)
     else:
         idx = np.arange(vertex_count, dtype=np.int64)
-    if len(idx) % 3:
-        raise InvalidInput("triangle index count is not a multiple of 3", code="invalid_gltf", field="mesh")
     if len(idx) and (idx.min() < 0 or idx.max() >= vertex_count):
         raise InvalidInput("triangle index out of range", code="invalid_gltf", field="mesh")
-    return idx.reshape(-1, 3)
+    if mode == MODES_TRIANGLES:
+        if len(idx) % 3:
+            raise InvalidInput("triangle index count is not a multiple of 3", code="invalid_gltf", field="mesh")
+        return idx.reshape(-1, 3)
+    k = np.arange(max(len(idx) - 2, 0))
+    if mode == MODES_TRIANGLE_STRIP:  # glTF 2.0 §3.7.2.1: odd triangles swap their first two vertices
+        odd = k % 2 == 1
+        tri = np.stack([idx[k], np.where(odd, idx[k + 2], idx[k + 1]), np.where(odd, idx[k + 1], idx[k + 2])], axis=1)
+    else:  # fan around the first vertex
+        tri = np.stack([np.full(len(k), idx[0] if len(idx) else 0), idx[k + 1], idx[k + 2]], axis=1)
+    keep = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])
+    return tri[keep].reshape(-1, 3)
 
 
 def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.ndarray, np.ndarray]:

@@ -12,7 +12,7 @@ import numpy as np
 from simcore.errors import InvalidInput
 from simcore.io.glb_packer import ARRAY_BUFFER, GlbBuilder
 from simcore.io.gltf_document import GltfDocument
-from simcore.io.gltf_rig import primitive_triangles
+from simcore.io.gltf_rig import MODES_TRIANGLES, TRIANGLE_MODES, primitive_triangles
 
 ELEMENT_ARRAY_BUFFER = 34963
 KEPT_ATTRIBUTES = ("POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", "COLOR_0")
@@ -80,7 +80,7 @@ def bake_static_glb(doc: GltfDocument, conversion: np.ndarray) -> tuple[bytes, n
         primitives = []
         for prim in src_mesh.get("primitives", []):
             attrs = prim.get("attributes", {})
-            if "POSITION" not in attrs or prim.get("mode", 4) != 4:
+            if "POSITION" not in attrs or prim.get("mode", MODES_TRIANGLES) not in TRIANGLE_MODES:  # strips and fans become lists
                 continue
             pos = doc.accessor(attrs["POSITION"]).astype(np.float64)
             faces = primitive_triangles(doc, prim, len(pos))
