@@ -15,11 +15,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from simcore.errors import InvalidInput, LimitExceeded
+from simcore.errors import InvalidInput, LimitExceeded, UnsupportedFormat
+from simcore.io.gltf_draco import decompress_draco
 
 COMPONENT_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 TYPE_WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 MAX_ACCESSOR_ELEMENTS = 50_000_000
+UNREADABLE_EXTENSIONS = {"EXT_meshopt_compression", "KHR_meshopt_compression"}  # no maintained Python decoder
 GLB_MAGIC = b"glTF"
 
 
@@ -108,7 +110,13 @@ class GltfDocument:
         for image in doc.get("images", []):
             if "uri" in image:
                 _decode_data_uri(str(image["uri"]))
-        return cls(doc, buffers)
+        document = cls(doc, buffers)
+        decompress_draco(document)
+        unreadable = sorted(set(doc.get("extensionsRequired", [])) & UNREADABLE_EXTENSIONS)
+        if unreadable:
+            raise UnsupportedFormat(f"the file requires {', '.join(unreadable)}, whose compressed geometry RigForge "
+                                    "cannot decode; export it without that compression", field="mesh")
+        return document
 
     def items(self, key: str) -> list[dict]:
         value = self.json.get(key, [])
@@ -122,7 +130,8 @@ class GltfDocument:
             raise _fail(f"{key}[{index}] does not exist")
         return items[index]
 
-    def _view_bytes(self, view_index: int) -> tuple[bytes, int]:
+    def view_bytes(self, view_index: int) -> tuple[bytes, int]:
+        """(bytes of bufferView `view_index`, its byteStride or 0)."""
         view = self._item("bufferViews", view_index)
         buffer = self.buffers[view.get("buffer", 0)] if view.get("buffer", 0) < len(self.buffers) else None
         if buffer is None:
@@ -133,7 +142,7 @@ class GltfDocument:
         return buffer[start:start + length], int(view.get("byteStride", 0))
 
     def _read_strided(self, view_index: int, offset: int, count: int, dtype: np.dtype, width: int) -> np.ndarray:
-        view, stride = self._view_bytes(view_index)
+        view, stride = self.view_bytes(view_index)
         element = dtype.itemsize * width
         stride = stride or element
         needed = offset + (count - 1) * stride + element if count else 0
