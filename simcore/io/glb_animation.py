@@ -71,6 +71,7 @@ def add_morph_animation(builder: GlbBuilder, clip: dict, slices: list, offsets: 
 
     slices:  PrimitiveSlice list (mesh, primitive, start, count) in vertex order; mesh m's node is node m.
     offsets: (T, V, 3) float bind-space vertex offsets, frame k at time k / fps.
+    The upload's own targets (blend shapes) stay first and keep their default weights throughout the clip.
     Returns JSON-ready stats (targets, interpolation, max offset).
     """
     frames = morph_key_frames(len(offsets), max_targets)
@@ -79,14 +80,17 @@ def add_morph_animation(builder: GlbBuilder, clip: dict, slices: list, offsets: 
     for s in slices:
         prim = meshes[s.mesh]["primitives"][s.primitive]
         part = offsets[frames, s.start:s.start + s.count].astype(np.float32)
-        prim["targets"] = [{"POSITION": builder.add_accessor(part[i], minmax=True)} for i in range(k)]
+        prim["targets"] = prim.get("targets", []) + [{"POSITION": builder.add_accessor(part[i], minmax=True)} for i in range(k)]
     names = [f"frame_{int(f)}" for f in frames]
     interpolation = "STEP" if k == len(offsets) else "LINEAR"
     times = frames / float(fps)
-    weights = np.eye(k, dtype=np.float32).reshape(-1)  # keyframe i shows target i alone
     for m in sorted({s.mesh for s in slices}):
-        meshes[m]["weights"] = [0.0] * k
-        meshes[m].setdefault("extras", {})["targetNames"] = names  # three.js morphTargetDictionary keys
+        own = [float(w) for w in meshes[m].get("weights", [])]
+        own_names = meshes[m].get("extras", {}).get("targetNames", [f"shape_{i}" for i in range(len(own))])
+        meshes[m]["weights"] = own + [0.0] * k
+        meshes[m].setdefault("extras", {})["targetNames"] = own_names + names  # three.js morphTargetDictionary keys
+        # keyframe i shows refinement target i alone, the upload's own shapes at their defaults
+        weights = np.hstack([np.tile(np.asarray(own, np.float32), (k, 1)), np.eye(k, dtype=np.float32)]).reshape(-1)
         sampler = _sampler(builder, clip, times, weights, interpolation)
         clip["channels"].append({"sampler": sampler, "target": {"node": m, "path": "weights"}})
     return {"targets": k, "frames": int(len(offsets)), "interpolation": interpolation,

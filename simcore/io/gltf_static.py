@@ -13,6 +13,7 @@ from simcore.errors import InvalidInput
 from simcore.io.glb_packer import ARRAY_BUFFER, GlbBuilder
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import MODES_TRIANGLES, TRIANGLE_MODES, primitive_triangles
+from simcore.io.input_morphs import baked_targets, target_defaults
 
 ELEMENT_ARRAY_BUFFER = 34963
 KEPT_ATTRIBUTES = ("POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", "COLOR_0")
@@ -100,12 +101,16 @@ def bake_static_glb(doc: GltfDocument, conversion: np.ndarray) -> tuple[bytes, n
                    "indices": builder.add_accessor(faces.reshape(-1).astype(np.uint32), target=ELEMENT_ARRAY_BUFFER)}
             if isinstance(prim.get("material"), int) and prim["material"] < n_materials:
                 out["material"] = prim["material"]
+            targets = baked_targets(doc, prim, m[:, :3, :3], builder)
+            if targets:
+                out["targets"] = targets
             primitives.append(out)
             all_verts.append(new_pos)
             all_faces.append(faces + offset)
             offset += len(pos)
         if primitives:
-            mesh_index = builder.add("meshes", {"name": str(src_mesh.get("name") or f"mesh{n}"), "primitives": primitives})
+            morphs = target_defaults(src_mesh, node, len(primitives[0].get("targets", [])))
+            mesh_index = builder.add("meshes", {"name": str(src_mesh.get("name") or f"mesh{n}"), "primitives": primitives, **morphs})
             scene_nodes.append(builder.add("nodes", {"name": str(node.get("name") or f"node{n}"), "mesh": mesh_index}))
     if not all_verts:
         raise InvalidInput("the file contains no triangle meshes", code="empty_mesh", field="mesh")

@@ -112,8 +112,32 @@ def _define_meshes(stage, layout: MeshLayout, infl: Influences | None, skel_path
             binding.CreateJointIndicesPrimvar(False, k).Set(Vt.IntArray.FromNumpy(infl.joints[rows].astype(np.int32).reshape(-1)))
             binding.CreateJointWeightsPrimvar(False, k).Set(Vt.FloatArray.FromNumpy(infl.weights[rows].reshape(-1)))
             binding.CreateGeomBindTransformAttr(Gf.Matrix4d(1.0))
+            _define_blend_shapes(stage, mesh, binding, doc, prim, doc.items("meshes")[s.mesh])
         out.append((mesh, rows))
     return out
+
+
+def _define_blend_shapes(stage, mesh, binding, doc, prim: dict, gltf_mesh: dict) -> None:
+    """The upload's morph targets as UsdSkel BlendShapes under the mesh, named as in the glTF when it names them."""
+    from pxr import Sdf, UsdSkel, Vt
+
+    targets = prim.get("targets", [])
+    if not targets:
+        return
+    given = gltf_mesh.get("extras", {}).get("targetNames", [])
+    taken: set[str] = set()
+    names, paths = [], []
+    for i, target in enumerate(targets):
+        name = usd_identifier(str(given[i]) if i < len(given) else f"shape_{i}", taken)
+        shape = UsdSkel.BlendShape.Define(stage, mesh.GetPath().AppendChild(name))
+        offsets = doc.accessor(target["POSITION"]).astype(np.float32) if "POSITION" in target else None
+        shape.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(offsets if offsets is not None else np.zeros((0, 3), np.float32)))
+        if "NORMAL" in target:
+            shape.CreateNormalOffsetsAttr(Vt.Vec3fArray.FromNumpy(doc.accessor(target["NORMAL"]).astype(np.float32)))
+        names.append(name)
+        paths.append(Sdf.Path(shape.GetPath()))
+    binding.CreateBlendShapesAttr(names)
+    binding.CreateBlendShapeTargetsRel().SetTargets(paths)
 
 
 def _define_animation(stage, skeleton: Skeleton, joints: list[str], animation: "JointAnimation") -> str:
