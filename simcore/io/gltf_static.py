@@ -116,7 +116,29 @@ def bake_static_glb(doc: GltfDocument, conversion: np.ndarray) -> tuple[bytes, n
         raise InvalidInput("the file contains no triangle meshes", code="empty_mesh", field="mesh")
     builder.json["scenes"] = [{"nodes": scene_nodes}]
     builder.json["scene"] = 0
+    _declare_extensions(builder.json, doc.json)
     return builder.to_glb(), np.concatenate(all_verts), np.concatenate(all_faces)
+
+
+def _extension_names(tree) -> set[str]:
+    """Names of every `extensions` entry anywhere inside a JSON tree."""
+    if isinstance(tree, dict):
+        found = set(tree.get("extensions", {})) if isinstance(tree.get("extensions"), dict) else set()
+        return found.union(*(_extension_names(v) for v in tree.values()))
+    if isinstance(tree, list):
+        return set().union(*(_extension_names(v) for v in tree))
+    return set()
+
+
+def _declare_extensions(out: dict, source: dict) -> None:
+    """Declare the extensions the kept materials, textures and images use (the validator rejects undeclared
+    ones, e.g. Blender's KHR_materials_emissive_strength); required stays required where it was."""
+    used = sorted(_extension_names({k: v for k, v in out.items() if k not in ("extensionsUsed", "extensionsRequired")}))
+    if used:
+        out["extensionsUsed"] = used
+        required = [e for e in source.get("extensionsRequired", []) if e in used]
+        if required:
+            out["extensionsRequired"] = required
 
 
 def static_arrays(doc: GltfDocument) -> tuple[np.ndarray, np.ndarray]:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+import struct
+
 import numpy as np
 import scipy.sparse as sp
 import trimesh
@@ -24,6 +27,17 @@ def capsule_glb(height: float = 0.8, radius: float = 0.1, textured: bool = True)
         baseColorTexture=image, baseColorFactor=[200, 180, 160, 255]))
     data = trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=True)
     return data, mesh
+
+
+def glb_with_json(data: bytes, edit) -> bytes:
+    """The GLB `data` with its JSON chunk passed through `edit(doc)` (in place); the BIN chunk is kept."""
+    json_len = struct.unpack_from("<I", data, 12)[0]
+    doc = json.loads(data[20:20 + json_len])
+    edit(doc)
+    body = json.dumps(doc).encode()
+    body += b" " * (-len(body) % 4)
+    rest = data[20 + json_len:]
+    return struct.pack("<4sII", b"glTF", 2, 20 + len(body) + len(rest)) + struct.pack("<I4s", len(body), b"JSON") + body + rest
 
 
 def chain_skeleton(joints: int, height: float = 0.8) -> Skeleton:

@@ -5,23 +5,10 @@ These tests fail (never skip) when node_modules/gltf-validator is absent: CI run
 
 from __future__ import annotations
 
-import json
-import struct
-
 import pytest
-from tests.simcore.io.rig_export_fixtures import capsule_glb
+from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
 
 from simcore.io.gltf_validate import ValidatorUnavailable, validate_gltf_file, validate_gltf_files
-
-
-def _glb_with_json(data: bytes, edit) -> bytes:
-    json_len = struct.unpack_from("<I", data, 12)[0]
-    doc = json.loads(data[20:20 + json_len])
-    edit(doc)
-    body = json.dumps(doc).encode()
-    body += b" " * (-len(body) % 4)
-    rest = data[20 + json_len:]
-    return struct.pack("<4sII", b"glTF", 2, 20 + len(body) + len(rest)) + struct.pack("<I4s", len(body), b"JSON") + body + rest
 
 
 def test_valid_file_has_no_errors(tmp_path):
@@ -40,7 +27,7 @@ def test_broken_accessor_is_reported_as_error(tmp_path):
 
     good, bad = tmp_path / "good.glb", tmp_path / "bad.glb"
     good.write_bytes(glb)
-    bad.write_bytes(_glb_with_json(glb, break_count))
+    bad.write_bytes(glb_with_json(glb, break_count))
     results = validate_gltf_files([good, bad])
     assert [r.ok for r in results] == [True, False]
     assert any(m["code"].startswith("ACCESSOR") or m["code"].startswith("BUFFER") for m in results[1].messages)
