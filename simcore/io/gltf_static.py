@@ -87,6 +87,8 @@ def bake_static_glb(doc: GltfDocument, conversion: np.ndarray) -> tuple[bytes, n
             faces = primitive_triangles(doc, prim, len(pos))
             m = conversion @ _vertex_matrices(doc, node, prim, world[n], len(pos), world)
             new_pos = np.einsum("vab,vb->va", m[:, :3, :3], pos) + m[:, :3, 3]
+            mirrored = np.linalg.det(m[faces[:, 0], :3, :3]) < 0  # a mirroring transform turns triangles inside out
+            faces[mirrored] = faces[mirrored][:, ::-1]
             out_attrs = {"POSITION": builder.add_accessor(new_pos.astype(np.float32), target=ARRAY_BUFFER, minmax=True)}
             for name in KEPT_ATTRIBUTES[1:]:
                 if name not in attrs:
