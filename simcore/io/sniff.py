@@ -13,6 +13,7 @@ MEDIA_TYPES = {
     "glb": "model/gltf-binary", "gltf": "model/gltf+json", "obj": "model/obj", "ply": "application/ply",
     "stl": "model/stl", "bvh": "application/x-bvh", "fbx": "application/octet-stream",
 }
+GLTF_KEYS = (b'"asset"', b'"accessors"', b'"bufferViews"', b'"buffers"', b'"meshes"', b'"nodes"', b'"scenes"')
 _OBJ_LINE = re.compile(rb"^\s*(v|vt|vn|f|o|g|s|usemtl|mtllib|#)(\s|$)")
 
 
@@ -39,7 +40,7 @@ def sniff(head: bytes, size: int) -> str:
     if head.lstrip()[:9].upper() == b"HIERARCHY":
         return "bvh"
     stripped = head.lstrip()
-    if stripped[:1] == b"{" and b'"asset"' in head:
+    if stripped[:1] == b"{" and any(key in head for key in GLTF_KEYS):  # JSON keys come in any order
         return "gltf"
     if len(head) >= 84:
         (count,) = struct.unpack_from("<I", head, 80)
