@@ -69,6 +69,9 @@ def decompress_draco(doc: "GltfDocument") -> int:
                 values = np.asarray(attribute["data"]).reshape(-1, TYPE_WIDTHS[acc["type"]])
                 acc.update(bufferView=add_view(values.astype(COMPONENT_DTYPES[acc["componentType"]])), byteOffset=0, count=len(values))
             if "indices" in prim:
+                if not hasattr(draco, "faces"):
+                    raise InvalidInput(f"{where}: the Draco data is a point cloud but the primitive has indices",
+                                       code="invalid_gltf", field="mesh")
                 faces = np.asarray(draco.faces, dtype=np.uint32).reshape(-1)
                 acc = doc.items("accessors")[int(prim["indices"])]
                 acc.update(bufferView=add_view(faces), byteOffset=0, count=len(faces), componentType=UINT32)

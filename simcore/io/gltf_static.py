@@ -97,7 +97,8 @@ def bake_static_glb(doc: GltfDocument, conversion: np.ndarray) -> tuple[bytes, n
                 if name in ("NORMAL", "TANGENT"):
                     rotated = np.einsum("vab,vb->va", np.linalg.inv(m[:, :3, :3]).transpose(0, 2, 1), data[:, :3])
                     rotated /= np.maximum(np.linalg.norm(rotated, axis=1, keepdims=True), 1e-12)
-                    data = np.concatenate([rotated, data[:, 3:]], axis=1).astype(np.float32)
+                    handedness = data[:, 3:] * np.sign(np.linalg.det(m[:, :3, :3]))[:, None]  # a mirror flips the bitangent
+                    data = np.concatenate([rotated, handedness], axis=1).astype(np.float32)
                 out_attrs[name] = builder.add_accessor(data, target=ARRAY_BUFFER)
             out = {"attributes": out_attrs, "mode": 4,
                    "indices": builder.add_accessor(faces.reshape(-1).astype(np.uint32), target=ELEMENT_ARRAY_BUFFER)}

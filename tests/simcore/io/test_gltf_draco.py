@@ -75,3 +75,12 @@ def test_meshopt_compression_is_refused_by_name() -> None:
     with pytest.raises(UnsupportedFormat) as err:
         GltfDocument.from_bytes(json.dumps(data).encode())
     assert err.value.code == "unsupported_format" and "EXT_meshopt_compression" in str(err.value)
+
+
+def test_a_draco_point_cloud_under_an_indexed_primitive_is_a_clear_error() -> None:
+    data = json.loads(_draco_gltf(CAPSULE, payload=DracoPy.encode(CAPSULE.vertices.astype(np.float32))))
+    prim = data["meshes"][0]["primitives"][0]
+    del prim["attributes"]["NORMAL"], prim["extensions"]["KHR_draco_mesh_compression"]["attributes"]["NORMAL"]
+    with pytest.raises(InvalidInput) as err:
+        GltfDocument.from_bytes(json.dumps(data).encode())
+    assert "point cloud" in str(err.value)
