@@ -20,7 +20,7 @@ def store_upload(storage: LocalStorage, upload: UploadFile, *, kind: str, field:
     try:
         fmt = require_kind(sniff(stored.head, stored.size), kind, field)
         if fmt in ("glb", "gltf"):
-            GltfDocument.from_bytes(stored.path.read_bytes())  # structure, buffer bounds, no external URIs
+            GltfDocument.from_bytes(stored.path.read_bytes(), decode_draco=False)  # structure, bounds, no external URIs
     except SimcoreError as exc:
         exc.field = field
         raise

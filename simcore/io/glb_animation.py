@@ -86,7 +86,7 @@ def add_morph_animation(builder: GlbBuilder, clip: dict, slices: list, offsets: 
     times = frames / float(fps)
     for m in sorted({s.mesh for s in slices}):
         own = [float(w) for w in meshes[m].get("weights", [])]
-        own_names = meshes[m].get("extras", {}).get("targetNames", [f"shape_{i}" for i in range(len(own))])
+        own_names = meshes[m].get("extras", {}).get("targetNames", [])  # ingest names every upload target
         meshes[m]["weights"] = own + [0.0] * k
         meshes[m].setdefault("extras", {})["targetNames"] = own_names + names  # three.js morphTargetDictionary keys
         # keyframe i shows refinement target i alone, the upload's own shapes at their defaults

@@ -92,8 +92,12 @@ class GltfDocument:
     buffers: list[bytes] = field(default_factory=list)
 
     @classmethod
-    def from_bytes(cls, data: bytes) -> "GltfDocument":
-        """Parse GLB or .gltf bytes; resolve buffers from the BIN chunk or data: URIs only."""
+    def from_bytes(cls, data: bytes, *, decode_draco: bool = True) -> "GltfDocument":
+        """Parse GLB or .gltf bytes; resolve buffers from the BIN chunk or data: URIs only.
+
+        decode_draco: decode Draco-compressed primitives (the worker reads geometry); the API's upload check
+        passes False, so decoding never runs in the API process.
+        """
         doc, binary = _split_glb(data) if is_glb(data) else (_parse_json(data), None)
         buffers: list[bytes] = []
         for i, buf in enumerate(doc.get("buffers", [])):
@@ -111,7 +115,8 @@ class GltfDocument:
             if "uri" in image:
                 _decode_data_uri(str(image["uri"]))
         document = cls(doc, buffers)
-        decompress_draco(document)
+        if decode_draco:
+            decompress_draco(document)
         unreadable = sorted(set(doc.get("extensionsRequired", [])) & UNREADABLE_EXTENSIONS)
         if unreadable:
             raise UnsupportedFormat(f"the file requires {', '.join(unreadable)}, whose compressed geometry RigForge "

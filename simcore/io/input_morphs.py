@@ -45,12 +45,13 @@ def baked_targets(doc: GltfDocument, prim: dict, linear: np.ndarray, builder: Gl
 
 
 def target_defaults(src_mesh: dict, node: dict, count: int) -> dict:
-    """Mesh-level `weights` (the node's override wins) and `extras.targetNames` for `count` targets."""
+    """Mesh-level `weights` (the node's override wins) and `extras.targetNames` for `count` targets; unnamed
+    targets are called shape_0, shape_1… so every later writer finds one name per target here."""
     if not count:
         return {}
     weights = node.get("weights", src_mesh.get("weights", [0.0] * count))
     names = src_mesh.get("extras", {}).get("targetNames") if isinstance(src_mesh.get("extras"), dict) else None
-    out: dict = {"weights": [float(w) for w in weights][:count] + [0.0] * max(count - len(weights), 0)}
-    if isinstance(names, list) and len(names) == count:
-        out["extras"] = {"targetNames": [str(n) for n in names]}
-    return out
+    if not (isinstance(names, list) and len(names) == count):
+        names = [f"shape_{i}" for i in range(count)]
+    return {"weights": [float(w) for w in weights][:count] + [0.0] * max(count - len(weights), 0),
+            "extras": {"targetNames": [str(n) for n in names]}}

@@ -118,17 +118,17 @@ def _define_meshes(stage, layout: MeshLayout, infl: Influences | None, skel_path
 
 
 def _define_blend_shapes(stage, mesh, binding, doc, prim: dict, gltf_mesh: dict) -> None:
-    """The upload's morph targets as UsdSkel BlendShapes under the mesh, named as in the glTF when it names them."""
+    """The upload's morph targets as UsdSkel BlendShapes under the mesh, named as in mesh.glb's targetNames."""
     from pxr import Sdf, UsdSkel, Vt
 
     targets = prim.get("targets", [])
     if not targets:
         return
-    given = gltf_mesh.get("extras", {}).get("targetNames", [])
+    given = gltf_mesh["extras"]["targetNames"]  # ingest names every target (input_morphs.target_defaults)
     taken: set[str] = set()
     names, paths = [], []
-    for i, target in enumerate(targets):
-        name = usd_identifier(str(given[i]) if i < len(given) else f"shape_{i}", taken)
+    for target, given_name in zip(targets, given):
+        name = usd_identifier(str(given_name), taken)
         shape = UsdSkel.BlendShape.Define(stage, mesh.GetPath().AppendChild(name))
         offsets = doc.accessor(target["POSITION"]).astype(np.float32) if "POSITION" in target else None
         shape.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(offsets if offsets is not None else np.zeros((0, 3), np.float32)))

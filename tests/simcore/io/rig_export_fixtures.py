@@ -1,10 +1,13 @@
-"""Small generated rigs for the exporter tests: a textured capsule, a joint chain along it, smooth weights."""
+"""Small generated rigs for the exporter tests (a textured capsule, a joint chain along it, smooth weights) and
+glTF builders (a GLB with its JSON edited, a Draco-compressed .gltf)."""
 
 from __future__ import annotations
 
+import base64
 import json
 import struct
 
+import DracoPy
 import numpy as np
 import scipy.sparse as sp
 import trimesh
@@ -68,3 +71,26 @@ def bend_animation(skeleton: Skeleton, frames: int = 12, fps: float = 24.0) -> J
     trans[:, 0, 0] += np.linspace(0, 0.2, frames)
     return JointAnimation(list(skeleton.names), fps, rot, trans, name="bend")
 
+
+def draco_gltf(mesh: trimesh.Trimesh, *, payload: bytes | None = None, required: str = "KHR_draco_mesh_compression") -> bytes:
+    """A .gltf whose one primitive is Draco-compressed (POSITION, NORMAL, indices); accessors have no bufferView."""
+    pos = mesh.vertices.astype(np.float32)
+    blob = payload if payload is not None else DracoPy.encode(pos, mesh.faces.astype(np.uint32), preserve_order=True,
+                                                              normals=mesh.vertex_normals)
+    decoded = DracoPy.decode(blob) if payload is None else None
+    uids = {a["attribute_type"]: a["unique_id"] for a in decoded.attributes} if decoded else {0: 0, 1: 1}
+    draco = {"bufferView": 0, "attributes": {"POSITION": uids[0], "NORMAL": uids[1]}}
+    doc = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "extensionsUsed": [required], "extensionsRequired": [required],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2,
+                                    "extensions": {"KHR_draco_mesh_compression": draco}}]}],
+        "accessors": [
+            {"componentType": 5126, "count": len(pos), "type": "VEC3", "min": pos.min(0).tolist(), "max": pos.max(0).tolist()},
+            {"componentType": 5126, "count": len(pos), "type": "VEC3"},
+            {"componentType": 5123, "count": 3 * len(mesh.faces), "type": "SCALAR"},
+        ],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(blob)}],
+        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
+    }
+    return json.dumps(doc).encode()

@@ -101,3 +101,10 @@ def test_a_job_exports_the_shapes_to_glb_and_usd(tmp_path: Path) -> None:
     assert list(UsdSkel.BindingAPI(mesh_prim).GetBlendShapesAttr().Get()) == ["smile", "shift"]
     offsets = np.asarray(UsdSkel.BlendShape(stage.GetPrimAtPath(mesh_prim.GetPath().AppendChild("shift"))).GetOffsetsAttr().Get())
     np.testing.assert_allclose(offsets, np.tile([0.0, 0.05, 0.0], (len(offsets), 1)), atol=1e-6)
+
+
+def test_unnamed_targets_get_names_and_default_weights() -> None:
+    from simcore.io.input_morphs import target_defaults
+
+    assert target_defaults({}, {}, 2) == {"weights": [0.0, 0.0], "extras": {"targetNames": ["shape_0", "shape_1"]}}
+    assert target_defaults({"weights": [0.5, 0.1]}, {"weights": [1.0, 0.0]}, 2)["weights"] == [1.0, 0.0]  # node wins
