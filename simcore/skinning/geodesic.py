@@ -1,11 +1,11 @@
 """Geodesic voxel binding (Dionne & de Lasa 2013, the distance UniRig's skinning model consumes).
 
 The mesh is voxelised into a solid (robust to holes and several components). Shortest paths run through
-the occupied voxels (26-neighbour graph, Euclidean edge lengths) from every joint's bone segments, so a
-distance never cuts through empty space between the legs or from an arm into the torso. Each joint is a
-super-source node linked to the voxels its segments cross (link length = voxel-centre-to-segment
-distance), and scipy's compiled Dijkstra runs once per joint over that graph; vertices then read the
-distance of the 8 voxel centres around them. Bulky shapes are coarsened to MAX_VOXELS.
+the occupied voxels (26 neighbours, Euclidean steps) from every joint's bone segments, so a distance never
+cuts through empty space between the legs or from an arm into the torso. A joint's search starts from the
+voxels its segments cross (at the voxel-centre-to-segment distance) and stops where the joint is too far to
+matter (CUTOFF); vertices then read the distance of the 8 voxel centres around them. Bulky shapes are
+coarsened to MAX_VOXELS.
 A Bellman-Ford sweep along mesh edges after the gathers (surface shortcuts) was measured and dropped: dev-set
 L1 0.5347 without it, 0.5353 with one sweep, and it took 0.17 s of xbot's 0.40 s (28k vertices, 67 joints).
 """
@@ -16,8 +16,6 @@ import itertools
 from collections.abc import Callable
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
@@ -25,6 +23,7 @@ from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_distances, joint_segments
 from simcore.skinning.postprocess import normalize_rows
+from simcore.skinning.voxel_paths import VoxelPaths
 
 ALPHA = 0.5  # Dionne & de Lasa falloff mix between 1/d and 1/d² (the paper's and UniRig's value)
 # Measured on the dev rigs (L1 vs artist weights, four issue assets): the plain falloff (sharpness 1) is far
@@ -33,29 +32,14 @@ ALPHA = 0.5  # Dionne & de Lasa falloff mix between 1/d and 1/d² (the paper's a
 SHARPNESS = 6.0
 MAX_VOXELS = 80_000  # occupied voxels; 182k (a winged dragon at 128) took 2.2 s of Dijkstra for 23 joints
 RESOLUTION = 128  # voxels along the longest side: 64 → 96 → 128 gave L1 0.430 → 0.424 → 0.387 (sharpness 6)
-# Beyond 1.5× the farthest nearest-joint distance a joint's weight is < 1.5^-24 ≈ 6e-5 of the nearest's, under
-# top_k's 1e-4 floor: searches stop there (top-4 weights identical to the full search on 7 dev rigs, 1.2-3× faster).
+# Where a joint is over 1.5× as far as a voxel's nearest joint, its weight there is < 1.5^-24 ≈ 6e-5 of the
+# nearest's, under top_k's 1e-4 floor: a joint's search stops at such voxels (+ SLACK_VOXELS, so paths that
+# skirt the bound are kept).
 CUTOFF = 1.5
+SLACK_VOXELS = 2.0
 DISTANCE_UNIT = 0.003  # × the bounding box's longest side
 LEAF_EXTENSION = 1.0  # leaf joints carry real weight (heads, hands): their segment continues the parent bone
-_OFFSETS = np.array([o for o in itertools.product((-1, 0, 1), repeat=3) if o != (0, 0, 0)], dtype=np.int64)
 _CORNERS = np.array(list(itertools.product((0, 1), repeat=3)), dtype=np.int64)
-
-
-def _voxel_graph(grid: VoxelGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Occupied voxel indices (n, 3), id volume (X, Y, Z) (-1 = empty), and the 26-neighbour graph in CSR
-    form: indptr (n + 1,), indices (E,) voxel ids, lengths (E,) float64 (rows already sorted, so no COO pass)."""
-    occ = grid.occupancy
-    ijk = np.argwhere(occ)
-    ids = np.full(np.asarray(occ.shape) + 2, -1, dtype=np.int64)  # one empty layer so neighbours never wrap
-    ids[tuple((ijk + 1).T)] = np.arange(len(ijk))
-    flat = np.ravel_multi_index(tuple((ijk + 1).T), ids.shape)
-    delta = np.ravel_multi_index(tuple((_OFFSETS + 1).T), ids.shape) - np.ravel_multi_index((1, 1, 1), ids.shape)
-    nb = ids.ravel()[flat[:, None] + delta[None, :]]  # (n, 26) neighbour ids, -1 = empty
-    has = nb >= 0
-    lengths = np.broadcast_to(np.linalg.norm(_OFFSETS, axis=1) * grid.pitch, nb.shape)
-    indptr = np.concatenate([[0], np.cumsum(has.sum(axis=1))])
-    return ijk, ids[1:-1, 1:-1, 1:-1], indptr, nb[has], lengths[has]
 
 
 def _bone_sources(
@@ -101,8 +85,9 @@ def geodesic_distances(
 
     vertices: (V, 3) float, faces: (F, 3) int, skeleton: J joints in the same space. Vertices in a part no
     bone reaches (a floating accessory) get their straight-line distances instead of infinity.
-    cutoff: when set, searches stop at `cutoff` × the largest nearest-joint distance of any voxel and farther
-    joints read as infinity (for weights, where such joints get nothing anyway); None = complete matrix.
+    cutoff: when set, a joint's search stops at voxels where it is over `cutoff` × as far as their nearest
+    joint (+ SLACK_VOXELS), and such joints read as infinity (for weights, where such joints get nothing
+    anyway); None = complete matrix.
     progress: called with the fraction done at each checkpoint (it may raise to stop the computation).
     """
     v = np.asarray(vertices, dtype=np.float64)
@@ -110,26 +95,20 @@ def geodesic_distances(
     wv = welded.vertices
     grid = solid_voxels(wv, welded.faces, resolution=resolution)
     occupied = int(grid.occupancy.sum())
-    if occupied > MAX_VOXELS:  # bulky shapes: coarsen so Dijkstra's cost stays bounded (volume ∝ resolution³)
+    if occupied > MAX_VOXELS:  # bulky shapes: coarsen so the searches' cost stays bounded (volume ∝ resolution³)
         coarser = max(int(resolution * (MAX_VOXELS / occupied) ** (1.0 / 3.0)), 16)
         grid = solid_voxels(wv, welded.faces, resolution=coarser)
-    ijk, ids, indptr, cols, lens = _voxel_graph(grid)
+    paths = VoxelPaths(grid.occupancy, grid.pitch)
+    ijk, ids = paths.ijk, paths.ids
     progress(0.3)
-    n, j = len(ijk), skeleton.num_joints
-    sj, sv, sd = _bone_sources(grid, ijk, ids, skeleton, leaf_extension)  # grouped by joint, in joint order
-    eps = 1e-9 * grid.pitch  # csgraph treats explicit zeros as missing edges
-    # Joint j is the super-source row n + j, after every voxel row.
-    source_ptr = indptr[-1] + np.cumsum(np.bincount(sj, minlength=j))
-    graph = sp.csr_matrix(
-        (np.concatenate([lens, sd + eps]), np.concatenate([cols, sv]), np.concatenate([indptr, source_ptr])),
-        shape=(n + j, n + j),
-    )
-    limit = np.inf
-    if cutoff is not None:  # one multi-source pass bounds how far any voxel is from its nearest joint
-        nearest = dijkstra(graph, directed=True, indices=np.arange(n, n + j), min_only=True)[:n]
-        finite = nearest[np.isfinite(nearest)]
-        limit = cutoff * float(finite.max()) if len(finite) else np.inf
-    voxel_dist = dijkstra(graph, directed=True, indices=np.arange(n, n + j), limit=limit)[:, :n].T  # (n, J)
+    j = skeleton.num_joints
+    sj, sv, sd = _bone_sources(grid, ijk, ids, skeleton, leaf_extension)
+    bound = None
+    if cutoff is not None:  # one pass from all joints at once: each voxel's nearest-joint distance bounds the rest
+        nearest = paths.distances(np.zeros_like(sj), sv, sd, 1)[:, 0]
+        bound = cutoff * nearest + SLACK_VOXELS * grid.pitch
+    progress(0.4)
+    voxel_dist = paths.distances(sj, sv, sd, j, bound)  # (n, J)
     progress(0.8)
     # Each vertex reads the 8 voxel centres around it (at least its own surface voxel is occupied).
     lower = np.floor((wv - grid.origin) / grid.pitch).astype(np.int64)
