@@ -21,8 +21,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rich.console import Console
-from rich.table import Table
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results" / "skin_per_asset.json"
@@ -61,6 +59,9 @@ def main() -> None:
     if args.inner:
         _inner(Path(args.inner[0]), Path(args.inner[1]))
         return
+
+    from rich.console import Console  # noqa: PLC0415 - not imported by the timed inner process
+    from rich.table import Table  # noqa: PLC0415
 
     from simcore.evaluation.assets import rigged_assets  # noqa: PLC0415
 
