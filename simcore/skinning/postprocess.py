@@ -8,9 +8,9 @@ import scipy.sparse as sp
 
 def normalize_rows(weights: np.ndarray) -> np.ndarray:
     """(V, J) float64 copy with non-negative rows summing to 1; all-zero rows stay zero."""
-    w = np.maximum(np.asarray(weights, dtype=np.float64), 0.0)
+    w = np.maximum(np.asarray(weights, dtype=np.float64), 0.0)  # a copy, divided in place
     s = w.sum(axis=1, keepdims=True)
-    return np.divide(w, s, out=np.zeros_like(w), where=s > 0)
+    return np.divide(w, s, out=w, where=s > 0)  # rows summing to 0 are already all zero
 
 
 def smooth_on_surface(weights: np.ndarray, adjacency: sp.csr_matrix, iterations: int, strength: float = 0.5) -> np.ndarray:
