@@ -15,10 +15,14 @@ import scipy.sparse as sp
 from scipy import ndimage
 from scipy.sparse.csgraph import dijkstra
 
+from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.graph_simplify import branch_joints, branches, merge_junctions, prune_spurs
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.types import JointKind, Skeleton
+
+
+SHEET_PART_AREA = 0.01  # parts with less of the area (a button on a flag) do not decide whether it is a sheet
 
 
 @dataclass(frozen=True)
@@ -166,18 +170,36 @@ def _extend_end(end: np.ndarray, inner: np.ndarray, distance: float) -> np.ndarr
     return end + distance * step / max(float(np.linalg.norm(step)), 1e-12)
 
 
-def sheet_chain(vertices: np.ndarray, ratio: float, spacing: float, max_joints: int) -> np.ndarray | None:
-    """(J, 3) joints of a chain along the principal axis when the mesh is a flat sheet, else None.
-
-    vertices: (V, 3) float64. A sheet (thickness < `ratio` × length) has no solid to thin; artists rig a strip,
-    flag or card as one chain from end to end, one joint per max(`spacing`, sheet width) of length.
-    """
-    pts = np.unique(vertices, axis=0)
-    centre = pts.mean(axis=0)
-    _, _, axes = np.linalg.svd(pts - centre, full_matrices=False)
+def _principal_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(centre (3,), axes (3, 3) rows by decreasing spread, coordinates (N, 3) in that frame) of points (N, 3)."""
+    centre = points.mean(axis=0)
+    _, _, axes = np.linalg.svd(points - centre, full_matrices=False)
     if len(axes) < 3:
         axes = np.vstack([axes, np.eye(3)])[:3]
-    local = (pts - centre) @ axes.T
+    return centre, axes, (points - centre) @ axes.T
+
+
+def _flat(points: np.ndarray, ratio: float) -> bool:
+    """Thinner than `ratio` × its length along its principal axes."""
+    extent = np.ptp(_principal_frame(points)[2], axis=0)
+    return bool(extent[0] > 0 and extent[2] < ratio * extent[0])
+
+
+def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_joints: int) -> np.ndarray | None:
+    """(J, 3) joints of a chain along the principal axis when the mesh is a flat sheet, else None.
+
+    parts: the mesh's connected parts (surface_parts). A sheet (thickness < `ratio` × length) has no solid to
+    thin; artists rig a strip, flag or card as one chain from end to end, one joint per max(`spacing`, sheet
+    width) of length. Each part holding SHEET_PART_AREA of the area must be flat itself (two solids far apart
+    are flat as a whole, and a chain through the empty space between them is no skeleton); the chain follows
+    those parts, smaller ones (a button) take their weights from it.
+    """
+    total = sum(p.area for p in parts)
+    deciding = [p.points for p in parts if p.area >= SHEET_PART_AREA * total] or [parts[0].points]
+    if not all(_flat(points, ratio) for points in deciding):
+        return None
+    pts = np.unique(np.concatenate(deciding), axis=0)
+    centre, axes, local = _principal_frame(pts)
     extent = np.ptp(local, axis=0)
     if extent[0] <= 0 or extent[2] >= ratio * extent[0]:
         return None
@@ -238,7 +260,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     """
     v = np.asarray(vertices, dtype=np.float64)
     scale = float(np.ptp(v, axis=0).max()) or 1.0
-    chain = sheet_chain(v, params.sheet_ratio, params.spacing * scale, max_joints)
+    chain = sheet_chain(surface_parts(v, faces), params.sheet_ratio, params.spacing * scale, max_joints)
     if chain is not None:
         names = ["root"] + [f"joint{k:03d}" for k in range(1, len(chain))]
         parents = np.arange(-1, len(chain) - 1, dtype=np.int64)

@@ -101,6 +101,30 @@ def test_flat_strip_gets_an_end_to_end_chain_along_its_length():
     assert skeleton.parents.tolist() == [-1, 0, 1]
 
 
+def test_two_solids_far_apart_are_not_a_sheet():
+    # A figure and a prop 30 m away are flat as a whole (2 % of the length thick); a sheet chain would put its
+    # joints in the empty space between them.
+    figure = capsule_between(np.array([0.0, 0.2, 0.0]), np.array([0.0, 1.5, 0.0]), 0.25)
+    prop = capsule_between(np.array([30.0, 0.2, 0.0]), np.array([30.0, 1.0, 0.0]), 0.05)
+    vertices = np.vstack([figure.vertices, prop.vertices])
+    faces = np.vstack([figure.faces, prop.faces + len(figure.vertices)])
+    skeleton, report = geometric_skeleton(vertices, faces)
+    assert "sheet" not in report and report["bodies"] == 2
+    gap = (skeleton.positions[:, 0] > 1.0) & (skeleton.positions[:, 0] < 29.0)
+    assert not gap.any(), skeleton.positions
+
+
+def test_a_flag_with_a_button_is_still_a_sheet():
+    xs, ys = np.meshgrid([-0.5, 0.5], np.linspace(0.0, 2.0, 5))
+    flag_v = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(10)])
+    flag_f = np.array([[2 * i, 2 * i + 1, 2 * i + 3] for i in range(4)] + [[2 * i, 2 * i + 3, 2 * i + 2] for i in range(4)])
+    button = trimesh.creation.icosphere(subdivisions=1, radius=0.02)  # under 1 % of the area: not deciding
+    vertices = np.vstack([flag_v, button.vertices + [0.0, 1.0, 0.03]])
+    faces = np.vstack([flag_f, button.faces + len(flag_v)])
+    _, report = geometric_skeleton(vertices, faces)
+    assert report["sheet"] is True
+
+
 @pytest.mark.parametrize(("axis", "label"), [(1, "upright: lower end"), (2, "level: back (-Z) end")])
 def test_a_tube_is_one_chain_rooted_at_an_end(axis: int, label: str):
     start, end = np.zeros(3), np.zeros(3)
