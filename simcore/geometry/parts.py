@@ -13,9 +13,11 @@ from simcore.geometry.weld import weld_vertices
 
 @dataclass
 class SurfacePart:
-    """points: (P, 3) float64 welded vertex positions of one connected part; area: its triangle area."""
+    """One connected part. points: (P, 3) float64 its welded vertex positions; faces: (K,) int64 indices of its
+    triangles in the input faces; area: their total area."""
 
     points: np.ndarray
+    faces: np.ndarray
     area: float
 
 
@@ -24,14 +26,32 @@ def surface_parts(vertices: np.ndarray, faces: np.ndarray) -> list[SurfacePart]:
 
     vertices: (V, 3) float, faces: (F, 3) int. A mesh whose triangles all collapsed is one part of zero area.
     """
-    welded = weld_vertices(vertices, faces)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    welded = weld_vertices(vertices, f)
     if len(welded.faces) == 0:
-        return [SurfacePart(np.asarray(vertices, dtype=np.float64).reshape(-1, 3), 0.0)]
+        return [SurfacePart(np.asarray(vertices, dtype=np.float64).reshape(-1, 3), np.arange(len(f)), 0.0)]
     count, label = connected_components(adjacency(welded.faces, len(welded.vertices)), directed=False)
-    tri = welded.vertices[welded.faces]
+    face_label = label[welded.index[f[:, 0]]]
+    tri = welded.vertices[welded.index[f]]
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    part_area = np.bincount(label[welded.faces[:, 0]], weights=area, minlength=count)
+    part_area = np.bincount(face_label, weights=area, minlength=count)
     used = np.zeros(len(welded.vertices), bool)
     used[welded.faces.ravel()] = True
-    parts = [SurfacePart(welded.vertices[(label == k) & used], float(part_area[k])) for k in range(count)]
+    parts = [SurfacePart(welded.vertices[(label == k) & used], np.flatnonzero(face_label == k), float(part_area[k]))
+             for k in range(count)]
     return sorted((p for p in parts if len(p.points)), key=lambda p: -p.area)
+
+
+def principal_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(centre (3,), axes (3, 3) rows by decreasing spread, coordinates (N, 3) in that frame) of points (N, 3)."""
+    centre = points.mean(axis=0)
+    _, _, axes = np.linalg.svd(points - centre, full_matrices=False)
+    if len(axes) < 3:
+        axes = np.vstack([axes, np.eye(3)])[:3]
+    return centre, axes, (points - centre) @ axes.T
+
+
+def is_flat(points: np.ndarray, ratio: float) -> bool:
+    """Thinner than `ratio` × its length along its principal axes."""
+    extent = np.ptp(principal_frame(points)[2], axis=0)
+    return bool(extent[0] > 0 and extent[2] < ratio * extent[0])

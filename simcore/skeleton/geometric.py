@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from scipy import ndimage
 from scipy.sparse.csgraph import dijkstra
 
-from simcore.geometry.parts import SurfacePart, surface_parts
+from simcore.geometry.parts import SurfacePart, is_flat, principal_frame, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.graph_simplify import branch_joints, branches, merge_junctions, prune_spurs
 from simcore.skeleton.medial import MedialForest, medial_forest
@@ -170,21 +170,6 @@ def _extend_end(end: np.ndarray, inner: np.ndarray, distance: float) -> np.ndarr
     return end + distance * step / max(float(np.linalg.norm(step)), 1e-12)
 
 
-def _principal_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(centre (3,), axes (3, 3) rows by decreasing spread, coordinates (N, 3) in that frame) of points (N, 3)."""
-    centre = points.mean(axis=0)
-    _, _, axes = np.linalg.svd(points - centre, full_matrices=False)
-    if len(axes) < 3:
-        axes = np.vstack([axes, np.eye(3)])[:3]
-    return centre, axes, (points - centre) @ axes.T
-
-
-def _flat(points: np.ndarray, ratio: float) -> bool:
-    """Thinner than `ratio` × its length along its principal axes."""
-    extent = np.ptp(_principal_frame(points)[2], axis=0)
-    return bool(extent[0] > 0 and extent[2] < ratio * extent[0])
-
-
 def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_joints: int) -> np.ndarray | None:
     """(J, 3) joints of a chain along the principal axis when the mesh is a flat sheet, else None.
 
@@ -196,10 +181,10 @@ def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_join
     """
     total = sum(p.area for p in parts)
     deciding = [p.points for p in parts if p.area >= SHEET_PART_AREA * total] or [parts[0].points]
-    if not all(_flat(points, ratio) for points in deciding):
+    if not all(is_flat(points, ratio) for points in deciding):
         return None
     pts = np.unique(np.concatenate(deciding), axis=0)
-    centre, axes, local = _principal_frame(pts)
+    centre, axes, local = principal_frame(pts)
     extent = np.ptp(local, axis=0)
     if extent[0] <= 0 or extent[2] >= ratio * extent[0]:
         return None

@@ -1,7 +1,8 @@
 """Pipeline stage `skeleton`: predict (or keep) the skeleton and write skeleton.json.
 
 Options used: `skeleton` (auto | geometric | humanoid | keep), `max_joints`, `up_axis`, `forward_axis`.
-`keep` reuses the upload's own skin (state.mesh.source_rig, already in the mesh frame). The ingested mesh
+`keep` reuses the upload's own skin (state.mesh.source_rig, already in the mesh frame). A ground plane
+under the model (simcore.geometry.ground) is left out and recorded in state.ground_faces. The ingested mesh
 is +Y up (ingest applies an `up_axis` override), so the humanoid fit is told "y" when an override was
 given and detects the up axis itself otherwise.
 
@@ -15,17 +16,18 @@ import json
 import time
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from simcore.errors import InvalidInput, SimcoreError
+from simcore.geometry.ground import ground_faces
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import Skeleton
 
 if TYPE_CHECKING:
-    import numpy as np
-
     from simcore.pipeline import PipelineState, StageProgress
 
 
-def _tokens(skeleton: Skeleton, vertices: "np.ndarray") -> tuple[dict[str, Any] | None, str | None]:
+def _tokens(skeleton: Skeleton, vertices: np.ndarray) -> tuple[dict[str, Any] | None, str | None]:
     """UniRig token ids of `skeleton` normalised by the mesh's bounding box, or (None, why not)."""
     try:
         from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
@@ -53,6 +55,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     progress.check_cancel()
     progress(0.05)
     started = time.perf_counter()
+    ground = ground_faces(mesh.vertices, mesh.faces)
     report: dict[str, Any]
     if options.skeleton == "keep":
         if mesh.source_rig is None:
@@ -62,7 +65,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
         method, report = "keep", {}
     else:
         prediction = predict_skeleton(
-            mesh.vertices, mesh.faces, method=options.skeleton, max_joints=options.max_joints,
+            mesh.vertices, mesh.faces[~ground], method=options.skeleton, max_joints=options.max_joints,
             up_axis="y" if options.up_axis else None, forward_axis=options.forward_axis,
         )
         skeleton, method, report = prediction.skeleton, prediction.method, prediction.report
@@ -70,7 +73,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
             state.warn("no humanoid was found with confidence; used the geometric skeleton instead")
     progress.check_cancel()
     progress(0.8)
-    tokens, token_error = _tokens(skeleton, mesh.vertices)
+    tokens, token_error = _tokens(skeleton, mesh.vertices[np.unique(mesh.faces[~ground])])  # the model's box
     doc = {"method": method, **skeleton.to_dict(), "tokens": tokens}
     if token_error:
         doc["tokens_error"] = token_error
@@ -78,12 +81,17 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     path.write_text(json.dumps(doc))
     state.artifacts["skeleton.json"] = path
     state.skeleton = skeleton
+    if ground.any():
+        state.ground_faces = ground
+        state.warn(f"a ground plane under the model ({int(ground.sum())} triangles) was left out of the skeleton and "
+                   f"bound to the root joint {skeleton.names[0]!r}; remove it before rigging if it should not move with the root")
     state.report["skeleton"] = {
         "method": method,
         "requested": options.skeleton,
         "joints": skeleton.num_joints,
         "tokens": None if tokens is None else len(tokens["ids"]),
         "seconds": round(time.perf_counter() - started, 3),
+        "ground_triangles": int(ground.sum()),
         **report,
     }
     progress(1.0)

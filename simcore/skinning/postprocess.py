@@ -51,3 +51,13 @@ def top_k(weights: np.ndarray, k: int, min_weight: float = 1e-4) -> sp.csr_matri
     out.eliminate_zeros()
     out.sort_indices()
     return out.astype(np.float32)
+
+
+def bind_to_joint(weights: sp.csr_matrix, rows: np.ndarray, joint: int) -> sp.csr_matrix:
+    """(V, J) CSR copy of `weights` in which the vertices `rows` follow `joint` alone (weight 1)."""
+    if len(rows) == 0:
+        return weights
+    keep = np.ones(weights.shape[0], bool)
+    keep[rows] = False
+    rigid = sp.csr_matrix((np.ones(len(rows), dtype=weights.dtype), (rows, np.full(len(rows), joint))), shape=weights.shape)
+    return (sp.diags(keep.astype(weights.dtype)) @ weights + rigid).tocsr()
