@@ -1,4 +1,4 @@
-"""Ground planes under a model: flat, level parts that everything else stands on.
+"""Ground planes under a model: flat, level parts (floors, base plates) that everything else stands on.
 
 Downloaded characters often come with the floor or base plate they were shown on. Left in, such a plane makes
 the skeleton a sheet or a second body (a humanoid is no longer found), and its corners follow whichever foot is
@@ -12,7 +12,7 @@ import numpy as np
 
 from simcore.geometry.parts import is_flat, principal_frame, surface_parts
 
-FLATNESS = 0.02  # a plane is thinner than this × its length
+FLATNESS = 0.1  # thinner than this × its length: a floor, or a base plate or disc (5 cm under 1 m is 0.05)
 MAX_TILT_DEG = 10.0  # its normal is within this of +Y
 SUNK = 0.02  # the rest may reach this share of its height below the plane (feet sunk into the floor)
 

@@ -41,6 +41,15 @@ def test_a_floor_under_the_feet_is_ground(figure: trimesh.Trimesh) -> None:
     assert ground.sum() == 2 and ground[-2:].all()
 
 
+def test_a_base_disc_is_ground(figure: trimesh.Trimesh) -> None:
+    disc = trimesh.creation.cylinder(radius=0.6, height=0.05, sections=32)  # along Z: turn it level
+    disc.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
+    disc.apply_translation([0.0, -0.02, 0.0])  # the feet rest 0.5 cm inside its top
+    v, f = _join(figure, disc)
+    ground = ground_faces(v, f)
+    assert ground[len(figure.faces):].all() and not ground[:len(figure.faces)].any()
+
+
 @pytest.mark.parametrize(("plane", "why"), [
     (lambda: _plane(2.0, 2.0), "above the head"),
     (lambda: _plane(0.0, 0.15, centre=(1.0, 0.0)), "beside the model, not under its centre"),
