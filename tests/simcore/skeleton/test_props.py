@@ -1,0 +1,51 @@
+"""A prop held up (a sword, a staff) must not stop the humanoid fit: it is tried away, and still skinned."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from simcore.geometry.capsule_creatures import capsule_between, stick_humanoid
+from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.props import protruding_parts
+from simcore.skinning.predict import compute_weights
+
+
+@pytest.fixture(scope="module")
+def swordsman() -> tuple[np.ndarray, np.ndarray, int]:
+    """The stick humanoid with a 1 m sword held upright in its right hand (a separate part); (V, F, sword's first vertex)."""
+    vertices, faces, joints = stick_humanoid()
+    hand = np.asarray(joints["RightHand"])
+    sword = capsule_between(hand + [0.0, -0.1, 0.05], hand + [0.0, 0.9, 0.05], 0.02)
+    body = trimesh.Trimesh(vertices, faces, process=False)
+    both = trimesh.util.concatenate([body, sword])
+    return np.asarray(both.vertices), np.asarray(both.faces), len(body.vertices)
+
+
+def test_the_sword_is_the_part_that_sticks_out(swordsman) -> None:
+    vertices, faces, first = swordsman
+    masks = protruding_parts(vertices, faces)  # farthest first; the capsule soup's hands and head follow
+    assert np.all(faces[masks[0]] >= first) and np.all(faces[~masks[0]] < first)
+
+
+def test_a_humanoid_holding_a_sword_up_is_fitted_without_it(swordsman) -> None:
+    vertices, faces, first = swordsman
+    prediction = predict_skeleton(vertices, faces, method="auto")
+    assert prediction.method == "humanoid"  # the sword's tip read as the head before: geometric
+    assert prediction.report["humanoid"]["prop_triangles_left_out"] > 0
+    skeleton = prediction.skeleton
+    assert skeleton.positions[:, 1].max() < 1.8  # no joint up the sword (its tip is at 2.3 m)
+    weights = compute_weights(vertices, faces, skeleton, method="geodesic").weights.toarray()
+    right_arm = [k for k, n in enumerate(skeleton.names) if n.startswith("mixamorig:Right") and ("Hand" in n or "Fore" in n)]
+    assert weights[first:, right_arm].sum(axis=1).mean() > 0.9  # the sword follows the hand holding it
+
+
+def test_a_part_inside_the_silhouette_is_not_tried_away() -> None:
+    vertices, faces, _ = stick_humanoid()
+    belt = capsule_between(np.array([-0.15, 0.95, 0.0]), np.array([0.15, 0.95, 0.0]), 0.03)  # within the body's box
+    both = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), belt])
+    belt_faces = np.arange(len(faces), len(both.faces))
+    assert not any(mask[belt_faces].any() for mask in protruding_parts(both.vertices, both.faces))
+    one_piece = capsule_between(np.array([0.0, 0.2, 0.0]), np.array([0.0, 1.5, 0.0]), 0.2)
+    assert protruding_parts(one_piece.vertices, one_piece.faces) == []
