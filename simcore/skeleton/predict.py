@@ -11,7 +11,7 @@ import numpy as np
 from simcore.errors import InvalidInput
 from simcore.geometry.referenced import referenced_mesh
 from simcore.skeleton.geometric import geometric_skeleton
-from simcore.skeleton.props import protruding_parts
+from simcore.skeleton.props import parts_to_try_without
 from simcore.skeleton.types import Skeleton
 
 Method = Literal["auto", "geometric", "humanoid"]
@@ -69,7 +69,7 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
         started = time.perf_counter()
         fit = fit_humanoid(v, f, max_joints=max_joints, up_axis=up_axis, forward_axis=forward_axis,
                            force=method == "humanoid")
-        for prop in protruding_parts(v, f) if fit.skeleton is None else []:  # a sword held up reads as a head
+        for prop in parts_to_try_without(v, f) if fit.skeleton is None else []:  # a sword held up, a skirt
             rest = referenced_mesh(v, f[~prop])
             retry = fit_humanoid(rest.vertices, rest.faces, max_joints=max_joints, up_axis=up_axis,
                                  forward_axis=forward_axis, force=method == "humanoid")

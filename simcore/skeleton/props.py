@@ -1,8 +1,9 @@
-"""Separate parts that stick out of a model: a sword held up, a staff, a spear, a bow.
+"""Separate parts that can keep a humanoid from being found: props that stick out of the model (a sword held
+up, a staff, a spear) and a big shell over the body (a skirt, a coat).
 
 Voxelised with the body, a prop held above the head becomes the highest medial branch (read as the head) or a
-third arm, and no biped is found. When the humanoid fit fails, the skeleton step tries again without each such
-part; the prop is still skinned with the mesh, so it follows the bones nearest to it (the hand holding it).
+third arm, and a skirt's shell adds branches of its own. When the humanoid fit fails, the skeleton step tries
+again without such parts; they are still skinned with the mesh, so they follow the bones nearest to them.
 """
 
 from __future__ import annotations
@@ -12,14 +13,15 @@ import numpy as np
 from simcore.geometry.parts import surface_parts
 
 PROTRUSION = 0.05  # × the model's size: how far a part must reach beyond all the others to be tried away
-MAX_TRIES = 3
+SHELL_SHARE = 0.5  # the part with the most area is tried away when the others hold at least this share
+MAX_SINGLE = 3  # parts tried one at a time; then all of them at once
 
 
-def protruding_parts(vertices: np.ndarray, faces: np.ndarray, limit: int = MAX_TRIES) -> list[np.ndarray]:
-    """(F,) bool face masks of up to `limit` separate parts that reach beyond every other part, farthest first.
-
-    vertices: (V, 3) float, faces: (F, 3) int. The part with the most area (the body) is never one.
-    """
+def parts_to_try_without(vertices: np.ndarray, faces: np.ndarray) -> list[np.ndarray]:
+    """(F,) bool face masks to fit again without, in order: up to MAX_SINGLE single parts (the largest part
+    when the others hold SHELL_SHARE of the area, so it may be a shell over them; then those reaching beyond
+    every other part, farthest first), then their union when there are several.
+    vertices: (V, 3) float, faces: (F, 3) int."""
     parts = surface_parts(vertices, faces)
     if len(parts) < 2:
         return []
@@ -27,13 +29,16 @@ def protruding_parts(vertices: np.ndarray, faces: np.ndarray, limit: int = MAX_T
     hi = np.array([p.points.max(axis=0) for p in parts])
     size = float((hi.max(axis=0) - lo.min(axis=0)).max())
     beyond = np.maximum(hi - _others(hi, highest=True), _others(lo, highest=False) - lo).max(axis=1)  # (K,)
-    reach = [(float(beyond[k]), k) for k in range(1, len(parts)) if beyond[k] > PROTRUSION * size]
+    area = np.array([p.area for p in parts])
+    chosen = [0] if area[1:].sum() >= SHELL_SHARE * area.sum() else []
+    chosen += [k for _, k in sorted((-beyond[k], k) for k in range(1, len(parts)) if beyond[k] > PROTRUSION * size)]
+    chosen = chosen[:MAX_SINGLE]
     masks = []
-    for _, k in sorted(reach, reverse=True)[:limit]:
+    for k in chosen:
         mask = np.zeros(len(np.asarray(faces).reshape(-1, 3)), bool)
         mask[parts[k].faces] = True
         masks.append(mask)
-    return masks
+    return masks + ([np.logical_or.reduce(masks)] if len(masks) > 1 else [])
 
 
 def _others(values: np.ndarray, *, highest: bool) -> np.ndarray:

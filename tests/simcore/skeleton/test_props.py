@@ -8,7 +8,7 @@ import trimesh
 
 from simcore.geometry.capsule_creatures import capsule_between, stick_humanoid
 from simcore.skeleton.predict import predict_skeleton
-from simcore.skeleton.props import protruding_parts
+from simcore.skeleton.props import parts_to_try_without
 from simcore.skinning.predict import compute_weights
 
 
@@ -25,8 +25,9 @@ def swordsman() -> tuple[np.ndarray, np.ndarray, int]:
 
 def test_the_sword_is_the_part_that_sticks_out(swordsman) -> None:
     vertices, faces, first = swordsman
-    masks = protruding_parts(vertices, faces)  # farthest first; the capsule soup's hands and head follow
-    assert np.all(faces[masks[0]] >= first) and np.all(faces[~masks[0]] < first)
+    sword = np.arange(len(faces)) >= np.flatnonzero((faces >= first).all(axis=1))[0]
+    masks = parts_to_try_without(vertices, faces)  # the capsule soup's own parts come with it
+    assert any(np.array_equal(mask, sword) for mask in masks)
 
 
 def test_a_humanoid_holding_a_sword_up_is_fitted_without_it(swordsman) -> None:
@@ -41,11 +42,24 @@ def test_a_humanoid_holding_a_sword_up_is_fitted_without_it(swordsman) -> None:
     assert weights[first:, right_arm].sum(axis=1).mean() > 0.9  # the sword follows the hand holding it
 
 
+def test_a_humanoid_in_a_skirt_is_fitted_without_it() -> None:
+    vertices, faces, _ = stick_humanoid()
+    skirt = trimesh.creation.cone(radius=0.35, height=0.9, sections=32)
+    skirt.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))  # apex up (+Y)
+    skirt.apply_translation([0.0, 0.12, 0.0])
+    side = ~(np.abs(skirt.vertices[skirt.faces][:, :, 1] - 0.12) < 1e-6).all(axis=1)  # open at the hem
+    both = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False),
+                                     trimesh.Trimesh(skirt.vertices, skirt.faces[side], process=False)])
+    prediction = predict_skeleton(both.vertices, both.faces, method="auto")
+    assert prediction.method == "humanoid"  # the skirt's shell gave 48 geometric joints before
+    assert prediction.report["humanoid"]["prop_triangles_left_out"] == int(side.sum())
+
+
 def test_a_part_inside_the_silhouette_is_not_tried_away() -> None:
     vertices, faces, _ = stick_humanoid()
     belt = capsule_between(np.array([-0.15, 0.95, 0.0]), np.array([0.15, 0.95, 0.0]), 0.03)  # within the body's box
     both = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), belt])
     belt_faces = np.arange(len(faces), len(both.faces))
-    assert not any(mask[belt_faces].any() for mask in protruding_parts(both.vertices, both.faces))
+    assert not any(mask[belt_faces].any() for mask in parts_to_try_without(both.vertices, both.faces))
     one_piece = capsule_between(np.array([0.0, 0.2, 0.0]), np.array([0.0, 1.5, 0.0]), 0.2)
-    assert protruding_parts(one_piece.vertices, one_piece.faces) == []
+    assert parts_to_try_without(one_piece.vertices, one_piece.faces) == []
