@@ -15,12 +15,14 @@ from simcore.geometry.parts import surface_parts
 PROTRUSION = 0.05  # × the model's size: how far a part must reach beyond all the others to be tried away
 SHELL_SHARE = 0.5  # the part with the most area is tried away when the others hold at least this share
 MAX_SINGLE = 3  # parts tried one at a time; then all of them at once
+MAX_LEFT_OUT = 0.4  # share of the area: a bigger part (a second character beside the first) is never left out
 
 
 def parts_to_try_without(vertices: np.ndarray, faces: np.ndarray) -> list[np.ndarray]:
     """(F,) bool face masks to fit again without, in order: up to MAX_SINGLE single parts (the largest part
     when the others hold SHELL_SHARE of the area, so it may be a shell over them; then those reaching beyond
-    every other part, farthest first), then their union when there are several.
+    every other part, farthest first), then their union when there are several; never more than MAX_LEFT_OUT
+    of the area.
     vertices: (V, 3) float, faces: (F, 3) int."""
     parts = surface_parts(vertices, faces)
     if len(parts) < 2:
@@ -29,16 +31,17 @@ def parts_to_try_without(vertices: np.ndarray, faces: np.ndarray) -> list[np.nda
     hi = np.array([p.points.max(axis=0) for p in parts])
     size = float((hi.max(axis=0) - lo.min(axis=0)).max())
     beyond = np.maximum(hi - _others(hi, highest=True), _others(lo, highest=False) - lo).max(axis=1)  # (K,)
-    area = np.array([p.area for p in parts])
-    chosen = [0] if area[1:].sum() >= SHELL_SHARE * area.sum() else []
+    area = np.array([p.area for p in parts]) / max(sum(p.area for p in parts), 1e-30)
+    chosen = [0] if area[1:].sum() >= SHELL_SHARE else []
     chosen += [k for _, k in sorted((-beyond[k], k) for k in range(1, len(parts)) if beyond[k] > PROTRUSION * size)]
-    chosen = chosen[:MAX_SINGLE]
+    chosen = [k for k in chosen if area[k] <= MAX_LEFT_OUT][:MAX_SINGLE]
     masks = []
     for k in chosen:
         mask = np.zeros(len(np.asarray(faces).reshape(-1, 3)), bool)
         mask[parts[k].faces] = True
         masks.append(mask)
-    return masks + ([np.logical_or.reduce(masks)] if len(masks) > 1 else [])
+    union = [np.logical_or.reduce(masks)] if len(masks) > 1 and area[chosen].sum() <= MAX_LEFT_OUT else []
+    return masks + union
 
 
 def _others(values: np.ndarray, *, highest: bool) -> np.ndarray:
