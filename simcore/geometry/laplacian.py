@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from simcore.arrays import unique_ints
+
 COT_MIN, COT_MAX = 1e-3, 1e3  # clamp: obtuse angles give negative cotangents; positive weights keep the maximum principle
 
 
@@ -15,7 +17,7 @@ def edges(faces: np.ndarray) -> np.ndarray:
     e = np.sort(e, axis=1)
     e = e[e[:, 0] != e[:, 1]]
     n = int(e.max()) + 1 if len(e) else 1
-    key = np.unique(e[:, 0] * n + e[:, 1])  # 1-D keys: much faster than unique(axis=0)
+    key = unique_ints(e[:, 0] * n + e[:, 1])  # 1-D keys: much faster than unique(axis=0)
     return np.stack([key // n, key % n], axis=1)
 
 

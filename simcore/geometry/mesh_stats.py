@@ -6,6 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from simcore.arrays import unique_ints
 from simcore.geometry.referenced import referenced_mesh
 
 
@@ -35,5 +36,5 @@ def mesh_stats(vertices: np.ndarray, faces: np.ndarray) -> dict:
         "unreferenced_vertices": int(mesh.count - len(mesh.ids)),
         "bbox_min": lo.round(6).tolist(), "bbox_max": hi.round(6).tolist(), "size": (hi - lo).round(6).tolist(),
         "watertight": bool(len(counts) > 0 and np.all(counts == 2)),
-        "components": int(len(np.unique(labels[used]))),
+        "components": int(len(unique_ints(labels[used]))),
     }

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simcore.arrays import unique_ints
+
 
 @dataclass
 class ReferencedMesh:
@@ -33,7 +35,7 @@ def referenced_mesh(vertices: np.ndarray, faces: np.ndarray) -> ReferencedMesh:
     """The mesh restricted to the vertices its faces use. vertices: (V, 3), faces: (F, 3) ints in [0, V)."""
     v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    ids = np.unique(f)
+    ids = unique_ints(f)
     remap = np.full(len(v), -1, dtype=np.int64)
     remap[ids] = np.arange(len(ids))
     return ReferencedMesh(ids, v[ids], remap[f], len(v))

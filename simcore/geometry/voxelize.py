@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from simcore.arrays import unique_ints
+
 PAD = 2  # empty voxels around the mesh so the outside is one connected region
 
 
@@ -84,7 +86,7 @@ def solid_voxels(vertices: np.ndarray, faces: np.ndarray, resolution: int = 64, 
     grid.surface[tuple(ijk.T)] = True
     shell = ndimage.binary_dilation(grid.surface, iterations=close_radius) if close_radius else grid.surface
     labels, _ = ndimage.label(~shell)
-    border = np.unique(np.concatenate([labels[[0, -1]].ravel(), labels[:, [0, -1]].ravel(), labels[:, :, [0, -1]].ravel()]))
+    border = unique_ints(np.concatenate([labels[[0, -1]].ravel(), labels[:, [0, -1]].ravel(), labels[:, :, [0, -1]].ravel()]))
     inside = ~np.isin(labels, border[border > 0]) 
     if close_radius:
         inside = ndimage.binary_erosion(inside, iterations=close_radius, border_value=0)

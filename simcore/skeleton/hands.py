@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from simcore.arrays import unique_ints
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.inside import snap_inside
@@ -40,7 +41,7 @@ def _hand_crop(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray,
     keep = near[faces].all(axis=1)
     if keep.sum() < 20:
         return None
-    used = np.unique(faces[keep])
+    used = unique_ints(faces[keep])
     remap = -np.ones(len(vertices), np.int64)
     remap[used] = np.arange(len(used))
     return vertices[used], remap[faces[keep]]

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from simcore.arrays import unique_ints
 from simcore.errors import InvalidInput, SimcoreError
 from simcore.geometry.ground import ground_faces
 from simcore.skeleton.predict import predict_skeleton
@@ -73,7 +74,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
             state.warn("no humanoid was found with confidence; used the geometric skeleton instead")
     progress.check_cancel()
     progress(0.8)
-    tokens, token_error = _tokens(skeleton, mesh.vertices[np.unique(mesh.faces[~ground])])  # the model's box
+    tokens, token_error = _tokens(skeleton, mesh.vertices[unique_ints(mesh.faces[~ground])])  # the model's box
     doc = {"method": method, **skeleton.to_dict(), "tokens": tokens}
     if token_error:
         doc["tokens_error"] = token_error

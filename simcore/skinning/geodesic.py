@@ -18,6 +18,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
+from simcore.arrays import unique_ints
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
@@ -59,7 +60,7 @@ def _bone_sources(
         pts = np.concatenate(samples)
         vox = grid.index_of(pts)
         vox = vox[grid.in_bounds(vox)]
-        vid = np.unique(ids[tuple(vox.T)]) if len(vox) else np.zeros(0, np.int64)
+        vid = unique_ints(ids[tuple(vox.T)]) if len(vox) else np.zeros(0, np.int64)
         vid = vid[vid >= 0]
         if len(vid) == 0:  # bone outside the solid (thin part, or a joint placed off the mesh): nearest voxels
             tree = tree or cKDTree(grid.centers(ijk))
