@@ -51,7 +51,8 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
     faces:    (F, 3) int64 triangles.
     method:   "geometric" (medial skeleton, any shape), "humanoid" (Mixamo template; falls back to geometric
               when no biped is found, saying so in the report) or "auto" (humanoid when an upright biped is
-              detected with confidence, else geometric).
+              detected with confidence, else geometric). A failed humanoid fit is retried without separate
+              parts that may hide the biped (simcore.skeleton.props); the report counts what was left out.
     up_axis / forward_axis: "x", "-x", "y", … overrides for the humanoid fit; None = detect.
     Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric".
     """
