@@ -10,24 +10,24 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.geometry.parts import is_flat, principal_frame, surface_parts
+from simcore.geometry.parts import SurfacePart, is_flat, principal_frame
 
 FLATNESS = 0.1  # thinner than this × its length: a floor, or a base plate or disc (5 cm under 1 m is 0.05)
 MAX_TILT_DEG = 10.0  # its normal is within this of +Y
 SUNK = 0.02  # the rest may reach this share of its height below the plane (feet sunk into the floor)
 
 
-def ground_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def ground_faces(parts: list[SurfacePart], face_count: int) -> np.ndarray:
     """(F,) bool: the triangles of ground planes under the rest of the mesh (+Y up).
 
-    A ground plane is a connected part that is flat and level, lies under every other part (but for SUNK), and
-    has the rest's horizontal centre over it. A mesh that is nothing but flat parts has no ground.
+    parts: the mesh's connected parts (surface_parts) over its `face_count` triangles. A ground plane is a part
+    that is flat and level, lies under every other part (but for SUNK), and has the rest's horizontal centre
+    over it. A mesh that is nothing but flat parts has no ground.
     """
-    parts = surface_parts(vertices, faces)
     level = [p for p in parts if len(p.points) >= 3 and is_flat(p.points, FLATNESS)
              and abs(principal_frame(p.points)[1][2, 1]) >= np.cos(np.deg2rad(MAX_TILT_DEG))]
     rest = [p for p in parts if all(p is not q for q in level)]
-    out = np.zeros(len(np.asarray(faces).reshape(-1, 3)), bool)
+    out = np.zeros(face_count, bool)
     if not level or not rest:
         return out
     body = np.concatenate([p.points for p in rest])

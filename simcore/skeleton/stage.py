@@ -21,6 +21,8 @@ import numpy as np
 from simcore.arrays import unique_ints
 from simcore.errors import InvalidInput, SimcoreError
 from simcore.geometry.ground import ground_faces
+from simcore.geometry.parts import surface_parts
+from simcore.skeleton.coverage import unreached_parts
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import Skeleton
 
@@ -56,7 +58,8 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     progress.check_cancel()
     progress(0.05)
     started = time.perf_counter()
-    ground = ground_faces(mesh.vertices, mesh.faces)
+    parts = surface_parts(mesh.vertices, mesh.faces)
+    ground = ground_faces(parts, len(mesh.faces))
     report: dict[str, Any]
     if options.skeleton == "keep":
         if mesh.source_rig is None:
@@ -86,6 +89,11 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
         state.ground_faces = ground
         state.warn(f"a ground plane under the model ({int(ground.sum())} triangles) was left out of the skeleton and "
                    f"bound to the root joint {skeleton.names[0]!r}; remove it before rigging if it should not move with the root")
+    unreached = unreached_parts([p for p in parts if not ground[p.faces].any()], skeleton)
+    far_triangles = sum(len(p.faces) for p in unreached)
+    if unreached:
+        state.warn(f"{len(unreached)} separate part(s) of the mesh ({far_triangles} triangles) lie far from every bone and "
+                   "will follow the nearest one rigidly; rig one character per file")
     state.report["skeleton"] = {
         "method": method,
         "requested": options.skeleton,
@@ -93,6 +101,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
         "tokens": None if tokens is None else len(tokens["ids"]),
         "seconds": round(time.perf_counter() - started, 3),
         "ground_triangles": int(ground.sum()),
+        "unreached_triangles": far_triangles,
         **report,
     }
     progress(1.0)

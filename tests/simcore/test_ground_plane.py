@@ -10,7 +10,8 @@ import pytest
 import trimesh
 
 from simcore.geometry.capsule_creatures import capsule_between, stick_humanoid
-from simcore.geometry.ground import ground_faces
+from simcore.geometry.ground import ground_faces as ground_of_parts
+from simcore.geometry.parts import surface_parts
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
 
@@ -22,6 +23,10 @@ def _plane(y: float, half: float, centre: tuple[float, float] = (0.0, 0.0), tilt
     t = np.deg2rad(tilt_deg)
     corners = corners @ np.array([[1, 0, 0], [0, np.cos(t), np.sin(t)], [0, -np.sin(t), np.cos(t)]]).T + [0, y, 0]
     return trimesh.Trimesh(corners, [[0, 2, 1], [0, 3, 2]], process=False)
+
+
+def ground_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    return ground_of_parts(surface_parts(vertices, faces), len(faces))
 
 
 def _join(*meshes: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
