@@ -60,4 +60,6 @@ def bind_to_joint(weights: sp.csr_matrix, rows: np.ndarray, joint: int) -> sp.cs
     keep = np.ones(weights.shape[0], bool)
     keep[rows] = False
     rigid = sp.csr_matrix((np.ones(len(rows), dtype=weights.dtype), (rows, np.full(len(rows), joint))), shape=weights.shape)
-    return (sp.diags(keep.astype(weights.dtype)) @ weights + rigid).tocsr()
+    out = (sp.diags(keep.astype(weights.dtype)) @ weights + rigid).tocsr()
+    out.eliminate_zeros()  # the cleared rows' entries
+    return out
