@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -51,6 +51,11 @@ class JobOptions(_Strict):
     skinning: Literal["auto", "geodesic", "heat"] = "auto"
     max_influences: Literal[4, 8] = 4
     smooth_iterations: int = Field(2, ge=0, le=50)
+    exclude_joints: list[Annotated[str, Field(min_length=1, max_length=200)]] = Field(
+        default_factory=list, max_length=256,
+        description="glob patterns (case-insensitive) of joints that get no skinning weight, e.g. a kept rig's "
+                    "IK targets and controls ['*IK*', '*pole*']; they stay in the exported skeleton",
+    )
     motion: MotionOptions = Field(default_factory=MotionOptions)
     refine: RefineOptions = Field(default_factory=RefineOptions)
     stages: list[Literal["skeleton", "skin", "motion", "refine", "export"]] | None = Field(

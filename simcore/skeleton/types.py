@@ -92,6 +92,25 @@ class Skeleton:
         orient = None if self.orientations is None else self.orientations[order]
         return Skeleton(self.positions[order], parents, [self.names[i] for i in order], [self.kinds[i] for i in order], orient)
 
+    def without(self, drop: np.ndarray) -> tuple["Skeleton", np.ndarray]:
+        """(the tree of the joints not in `drop`, their indices here). drop: (J,) bool, never the root. Each kept
+        joint hangs from its nearest kept ancestor, so the bones it makes with its kept children remain."""
+        drop = np.asarray(drop, bool)
+        if drop[0]:
+            raise InvalidInput(f"the root joint {self.names[0]!r} cannot be left out", field="skeleton")
+        kept = np.flatnonzero(~drop)
+        index = np.full(self.num_joints, -1, dtype=np.int64)
+        index[kept] = np.arange(len(kept))
+        parents = []
+        for j in kept:
+            p = int(self.parents[j])
+            while p >= 0 and drop[p]:
+                p = int(self.parents[p])
+            parents.append(index[p] if p >= 0 else -1)
+        orient = None if self.orientations is None else self.orientations[kept]
+        sub = Skeleton(self.positions[kept], np.asarray(parents), [self.names[i] for i in kept], [self.kinds[i] for i in kept], orient)
+        return sub, kept
+
     def to_dict(self) -> dict:
         """JSON-ready form (positions as lists)."""
         return {

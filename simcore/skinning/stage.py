@@ -1,14 +1,18 @@
 """The `skin` pipeline stage: weights for the ingested mesh on the stage-2 skeleton.
 
 A ground plane the skeleton stage found (state.ground_faces) is left out of the weights and bound to the root.
+Joints matching options.exclude_joints (a kept rig's IK targets and controls) get no weight: the weights are
+computed on the tree without them and they keep empty columns.
 """
 
 from __future__ import annotations
 
+import fnmatch
 import time
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
 from simcore.metrics.skinning import weight_stats
@@ -31,17 +35,21 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
         progress(fraction)
 
     ground = state.ground_faces if state.ground_faces is not None else np.zeros(len(state.mesh.faces), bool)
+    drop = _excluded(state)
+    skeleton, kept = state.skeleton.without(drop)
     result = compute_weights(
         state.mesh.vertices,
         state.mesh.faces[~ground],
-        state.skeleton,
+        skeleton,
         method=options.skinning,
         max_influences=options.max_influences,
         smooth_iterations=options.smooth_iterations,
         progress=report,
     )
+    w = result.weights  # columns of the kept joints → columns of the whole skeleton
+    weights = sp.csr_matrix((w.data, kept[w.indices], w.indptr), shape=(w.shape[0], state.skeleton.num_joints))
     ground_only = np.setdiff1d(state.mesh.faces[ground], state.mesh.faces[~ground])
-    state.weights = bind_to_joint(result.weights, ground_only, 0)  # joint 0 is the root (parents come first)
+    state.weights = bind_to_joint(weights, ground_only, 0)  # joint 0 is the root (parents come first)
     stats = weight_stats(state.weights)
     if stats["unweighted_vertices"]:
         state.warn(f"{stats['unweighted_vertices']} vertices received no skinning weight")
@@ -50,8 +58,24 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
         "method": result.method,
         "max_influences": options.max_influences,
         "smooth_iterations": options.smooth_iterations,
+        "excluded_joints": [name for name, out in zip(state.skeleton.names, drop) if out],
         "scores": result.scores,
         "weights": stats,
         "seconds": round(time.perf_counter() - started, 3),
     }
     progress(1.0)
+
+
+def _excluded(state: "PipelineState") -> np.ndarray:
+    """(J,) bool: the joints options.exclude_joints names (glob, case-insensitive); warns of patterns that match none."""
+    names = [n.lower() for n in state.skeleton.names]
+    drop = np.zeros(len(names), bool)
+    for pattern in state.options.exclude_joints:
+        hit = np.array([fnmatch.fnmatchcase(n, pattern.lower()) for n in names])
+        if not hit.any():
+            state.warn(f"options.exclude_joints pattern {pattern!r} matches no joint")
+        drop |= hit
+    if drop[0]:
+        raise InvalidInput(f"options.exclude_joints leaves out the root joint {state.skeleton.names[0]!r}; every vertex "
+                           "needs a joint to follow", code="invalid_option", field="options.exclude_joints")
+    return drop

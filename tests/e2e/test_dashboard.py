@@ -101,6 +101,7 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
     drop_file(page, "label.dropzone[for=mesh]", dev_assets / "fox.glb", "fox.glb")
     page.wait_for_selector("label[for=mesh] >> text=fox.glb")
     page.select_option("#opt-max-influences", "4")
+    page.fill("#opt-exclude", "*_nope")  # a pattern that matches no joint: the job goes on and the report says so
     page.screenshot(path=str(ARTIFACTS / "02-new-job.png"), full_page=True)
     record_progress(page, "[aria-label='upload progress']")
     page.click("#submit-job")
@@ -121,6 +122,7 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
 
     # report tables
     page.wait_for_selector("#report-mesh")
+    assert "'*_nope' matches no joint" in page.inner_text("#report-warnings")
     assert "1,728" in page.inner_text("#report-mesh")  # fox.glb vertices
     assert {"ingest", "skeleton", "skin", "export"} <= set(re.findall(r"^(\w+)\t", page.inner_text("#timings").lower(), re.M))
 

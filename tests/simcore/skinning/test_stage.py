@@ -12,6 +12,7 @@ from simcore.geometry.capsule_creatures import quadruped
 from simcore.geometry.mesh import IngestedMesh
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, PipelineState, StageProgress, _stages
+from simcore.skeleton.types import Skeleton
 from simcore.skinning import stage
 
 
@@ -43,3 +44,35 @@ def test_skin_stage_needs_a_skeleton(tmp_path: Path) -> None:
 def test_skin_runs_right_after_skeleton() -> None:
     names = [name for name, _, _ in _stages()]
     assert names.index("skin") == names.index("skeleton") + 1
+
+
+def _ik_rig(tmp_path: Path, **options) -> tuple[PipelineState, int]:
+    """The capsule quadruped's skeleton plus an IK target under the root, placed at the first foot."""
+    vertices, faces, skeleton = quadruped()
+    foot = int(np.argmin(skeleton.positions[:, 1]))
+    rig = Skeleton(np.vstack([skeleton.positions, skeleton.positions[foot]]), np.append(skeleton.parents, 0),
+                   [*skeleton.names, "Foot_IK"])
+    state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"), JobOptions(skinning="geodesic", **options), tmp_path)
+    state.mesh = IngestedMesh(vertices, faces, b"")
+    state.skeleton = rig
+    return state, rig.num_joints - 1
+
+
+def test_excluded_joints_get_no_weight_and_keep_their_column(tmp_path: Path) -> None:
+    state, ik = _ik_rig(tmp_path)
+    stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
+    assert state.weights[:, ik].sum() > 1.0  # left in, the IK target takes weight around the foot
+
+    state, ik = _ik_rig(tmp_path, exclude_joints=["*_ik", "nothing*"])
+    stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
+    assert state.weights.shape[1] == ik + 1 and state.weights[:, ik].sum() == 0.0
+    np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
+    assert state.report["skinning"]["excluded_joints"] == ["Foot_IK"]
+    assert state.report["warnings"] == ["options.exclude_joints pattern 'nothing*' matches no joint"]
+
+
+def test_the_root_cannot_be_excluded(tmp_path: Path) -> None:
+    state, _ = _ik_rig(tmp_path, exclude_joints=["*"])
+    with pytest.raises(InvalidInput) as err:
+        stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
+    assert err.value.field == "options.exclude_joints"

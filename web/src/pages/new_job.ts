@@ -48,6 +48,7 @@ export function newJobPage(root: HTMLElement): () => void {
   const skinning = select("opt-skinning", "options.skinning", [["auto", "auto (best score)"], ["geodesic", "geodesic voxel binding"], ["heat", "heat diffusion"]], "auto");
   const maxInfluences = select("opt-max-influences", "options.max_influences", [["4", "4 (game engines)"], ["8", "8 (film)"]], "4");
   const smooth = h("input", { type: "number", id: "opt-smooth", "data-field": "options.smooth_iterations", value: "2", min: "0", max: "50" });
+  const exclude = h("input", { type: "text", id: "opt-exclude", "data-field": "options.exclude_joints", placeholder: "*IK*, *pole*" });
   const clip = h("input", { type: "text", id: "opt-clip", "data-field": "options.motion.clip", placeholder: "first clip" });
   const inPlace = h("input", { type: "checkbox", id: "opt-in-place", "data-field": "options.motion.in_place" });
   const loop = h("input", { type: "checkbox", id: "opt-loop", "data-field": "options.motion.loop" });
@@ -69,7 +70,8 @@ export function newJobPage(root: HTMLElement): () => void {
       field("Method", skeleton), field("Max joints", maxJoints),
       field("Units", units, "auto guesses from the size"), field("Up axis", upAxis)),
     h("fieldset", {}, h("legend", {}, "Skinning"),
-      field("Method", skinning), field("Max influences", maxInfluences), field("Smoothing passes", smooth)),
+      field("Method", skinning), field("Max influences", maxInfluences), field("Smoothing passes", smooth),
+      field("Leave out joints", exclude, "comma-separated name patterns that get no weight (a kept rig's IK targets)")),
     h("fieldset", {}, h("legend", {}, "Motion (needs a motion file or clips in the mesh)"),
       field("Clip", clip, "name or index; empty = the first clip"), field("Frame rate", fps, "resample to this fps; empty keeps the clip's"),
       field("In place", inPlace, "remove root horizontal travel"), field("Loop", loop)),
@@ -112,6 +114,7 @@ export function newJobPage(root: HTMLElement): () => void {
       skinning: skinning.value as JobOptionsInput["skinning"],
       max_influences: Number(maxInfluences.value) as 4 | 8,
       smooth_iterations: smooth.valueAsNumber,
+      exclude_joints: exclude.value.split(",").map((p) => p.trim()).filter((p) => p !== ""),
       motion: { clip: clip.value === "" ? null : /^\d+$/.test(clip.value) ? Number(clip.value) : clip.value,
         in_place: inPlace.checked, loop: loop.checked, fps: fps.value === "" ? null : fps.valueAsNumber },
       refine: { enabled: refine.checked, preset: preset.value as NonNullable<JobOptionsInput["refine"]>["preset"] },
