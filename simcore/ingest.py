@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 from simcore.errors import InvalidInput, LimitExceeded
 from simcore.geometry.mesh import IngestedMesh
 from simcore.geometry.mesh_stats import mesh_stats
+from simcore.geometry.parts import bulk_size, surface_parts
 from simcore.geometry.referenced import referenced_mesh
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
@@ -121,11 +122,14 @@ def ingest(data: bytes, fmt: str, *, up_axis: str | None = None, units: str = "a
     _check(raw_vertices, raw_faces, max_vertices)
     extents = np.ptp(referenced_mesh(raw_vertices, raw_faces).vertices, axis=0)  # stray vertices set no size
     up_guess = guess_up_axis(fmt, extents)
-    unit_guess = guess_units(float(extents.max()))
+    size = float(extents.max())
+    if guess_units(size) != "m":  # big, or a small part far away makes it look big: size it by its bulk
+        size = bulk_size(surface_parts(raw_vertices, raw_faces))
+    unit_guess = guess_units(size)
     up = up_axis or up_guess
     unit = unit_guess if units == "auto" else units
     if units == "auto" and unit != "m":
-        warnings.append(f"coordinates look like {unit} (largest extent {extents.max():.1f}); scaled to metres")
+        warnings.append(f"coordinates look like {unit} (size {size:.1f}); scaled to metres")
     if up_axis is None and up != "y":
         warnings.append(f"no up axis given; guessed +{up.upper()} up for a {fmt.upper()} file and rotated it to +Y")
     conversion = conversion_matrix(up, UNIT_SCALE[unit])

@@ -55,3 +55,16 @@ def is_flat(points: np.ndarray, ratio: float) -> bool:
     """Thinner than `ratio` × its length along its principal axes."""
     extent = np.ptp(principal_frame(points)[2], axis=0)
     return bool(extent[0] > 0 and extent[2] < ratio * extent[0])
+
+
+def bulk_size(parts: list[SurfacePart], share: float = 0.9) -> float:
+    """Longest bounding-box side of the largest parts that together hold `share` of the area: a small part far
+    away (a prop left across the scene) does not set the size. parts: surface_parts' list, largest first."""
+    total = sum(p.area for p in parts)
+    held, points = 0.0, []
+    for part in parts:
+        points.append(part.points)
+        held += part.area
+        if held >= share * total:
+            break
+    return float(np.ptp(np.concatenate(points), axis=0).max())

@@ -46,3 +46,17 @@ def test_simulation_volume_ignores_a_stray_vertex() -> None:
     np.testing.assert_array_equal(stray.positions, clean.positions)
     np.testing.assert_array_equal(stray.vertex_particles[:-1], clean.vertex_particles)
     assert stray.vertex_particles[-1] == -1  # no particle out at the stray vertex: it follows its neighbours
+
+
+def test_a_small_part_far_away_does_not_set_the_units() -> None:
+    # A 1.7 m figure with a small prop left 30 m away reads as metres; the whole box (30 m) read as centimetres.
+    figure = trimesh.creation.capsule(height=1.2, radius=0.25)
+    prop = trimesh.creation.box([0.05, 0.05, 1.0])
+    prop.apply_translation([30.0, 0.0, 0.0])
+    mesh = ingest(trimesh.util.concatenate([figure, prop]).export(file_type="glb"), "glb")
+    assert mesh.stats["units_applied"] == "m" and mesh.stats["warnings"] == []
+    # The same in centimetres (prop 3000 cm away) is still centimetres, not millimetres.
+    figure.apply_scale(100.0)
+    prop.apply_scale(100.0)
+    mesh = ingest(trimesh.util.concatenate([figure, prop]).export(file_type="glb"), "glb")
+    assert mesh.stats["units_applied"] == "cm"
