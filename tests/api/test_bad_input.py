@@ -102,7 +102,9 @@ def test_missing_mesh_field_names_the_field(client, auth):
 
 
 @pytest.mark.parametrize(("options", "field"), [("{not json", "options"), ('{"skinning": "magic"}', "options.skinning"),
-                                                ('{"unknown_knob": 1}', "options.unknown_knob"), ("[1, 2]", "options")])
+                                                ('{"unknown_knob": 1}', "options.unknown_knob"), ("[1, 2]", "options"),
+                                                ('{"exclude_joints": "*IK*"}', "options.exclude_joints"),
+                                                ('{"exclude_joints": [""]}', "options.exclude_joints.0")])
 def test_invalid_options_name_the_option(client, auth, options, field):
     assert_problem(post(client, auth, b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj", options=options), 422, "invalid_options", field)
 
