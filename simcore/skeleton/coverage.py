@@ -9,32 +9,38 @@ from __future__ import annotations
 import numpy as np
 
 from simcore.geometry.parts import SurfacePart
+from simcore.geometry.voxelize import surface_samples
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
 
-FAR = 0.4  # × the model's size: a part whose every point is farther than this from every bone is unreached
+FAR = 0.4  # × the model's size: a part whose surface is farther than this from every bone is unreached
 # (0.25 flagged the top of robot_expressive's big head, 0.32 from its head bone, which the artist bound rigidly)
 MIN_AREA = 0.01  # share of the area: smaller parts (an eye, a button) are not reported
-SAMPLES = 2000  # points per part measured
+SPACING = 0.05  # × the model's size: how densely a part's surface is measured (big triangles are not just corners)
+SAMPLES = 4000  # at most this many of those points per part
 
 
-def unreached_parts(parts: list[SurfacePart], skeleton: Skeleton) -> list[SurfacePart]:
+def unreached_parts(vertices: np.ndarray, faces: np.ndarray, parts: list[SurfacePart], skeleton: Skeleton) -> list[SurfacePart]:
     """The parts (holding at least MIN_AREA of the area) farther than FAR × the model's size from every bone.
 
-    parts: the mesh's connected parts (surface_parts); skeleton: in the same frame.
+    vertices (V, 3), faces (F, 3): the mesh; parts: its connected parts (surface_parts), or some of them;
+    skeleton: in the same frame. A part with a joint inside its bounding box (a blob around its one joint, a
+    sheet with its chain in it) is reached.
     """
     if not parts:
         return []
-    points = np.concatenate([p.points for p in parts])
-    size = float(np.ptp(points, axis=0).max())
+    size = float(np.ptp(np.concatenate([p.points for p in parts]), axis=0).max())
     total = sum(p.area for p in parts)
     seg = joint_segments(skeleton)
     out = []
     for part in parts:
         if part.area < MIN_AREA * total:
             continue
-        sample = part.points[:: max(1, len(part.points) // SAMPLES)]  # a connected part: its spacing ≪ FAR
-        nearest = float(closest_on_segments(sample, seg.heads, seg.tails)[0].min())
-        if nearest > FAR * size:
+        lo, hi = part.points.min(axis=0) - 1e-6 * size, part.points.max(axis=0) + 1e-6 * size
+        if np.any(np.all((skeleton.positions >= lo) & (skeleton.positions <= hi), axis=1)):
+            continue
+        points = surface_samples(vertices, faces[part.faces], SPACING * size)
+        points = points[:: max(1, len(points) // SAMPLES)]
+        if float(closest_on_segments(points, seg.heads, seg.tails)[0].min()) > FAR * size:
             out.append(part)
     return out

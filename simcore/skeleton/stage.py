@@ -89,7 +89,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
         state.ground_faces = ground
         state.warn(f"a ground plane under the model ({int(ground.sum())} triangles) was left out of the skeleton and "
                    f"bound to the root joint {skeleton.names[0]!r}; remove it before rigging if it should not move with the root")
-    unreached = unreached_parts([p for p in parts if not ground[p.faces].any()], skeleton)
+    unreached = unreached_parts(mesh.vertices, mesh.faces, [p for p in parts if not ground[p.faces].any()], skeleton)
     far_triangles = sum(len(p.faces) for p in unreached)
     if unreached:
         state.warn(f"{len(unreached)} separate part(s) of the mesh ({far_triangles} triangles) lie far from every bone and "
