@@ -70,7 +70,10 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
         started = time.perf_counter()
         fit = fit_humanoid(v, f, max_joints=max_joints, up_axis=up_axis, forward_axis=forward_axis,
                            force=method == "humanoid")
-        for prop in parts_to_try_without(v, f) if fit.skeleton is None else []:  # a sword held up, a skirt
+        tries = parts_to_try_without(v, f) if fit.skeleton is None else []  # a sword held up, a skirt
+        if "checks" not in fit.report:  # no biped layout at all (a quadruped): one try, without all of them
+            tries = tries[-1:]
+        for prop in tries:
             rest = referenced_mesh(v, f[~prop])
             retry = fit_humanoid(rest.vertices, rest.faces, max_joints=max_joints, up_axis=up_axis,
                                  forward_axis=forward_axis, force=method == "humanoid")
