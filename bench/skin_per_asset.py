@@ -19,8 +19,12 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from simcore.skeleton.types import Skeleton
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results" / "skin_per_asset.json"
@@ -37,7 +41,7 @@ def _inner(job: Path, out: Path) -> None:
     np.savez(out, weights=weights.toarray().astype(np.float32))
 
 
-def _call_seconds(vertices: np.ndarray, faces: np.ndarray, skeleton: object, repeats: int = 3) -> float:
+def _call_seconds(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, repeats: int = 3) -> float:
     """Median warm-call time of `auto` (the first call, which loads compiled code, is not counted)."""
     from simcore.skinning.predict import compute_weights  # noqa: PLC0415
 

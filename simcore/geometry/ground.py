@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.geometry.parts import SurfacePart, is_flat, principal_frame
+from simcore.geometry.parts import SurfacePart, flat_normal
 
 FLATNESS = 0.1  # thinner than this × its length: a floor, or a base plate or disc (5 cm under 1 m is 0.05)
 MAX_TILT_DEG = 10.0  # its normal is within this of +Y
@@ -24,8 +24,8 @@ def ground_faces(parts: list[SurfacePart], face_count: int) -> np.ndarray:
     that is flat and level, lies under every other part (but for SUNK), and has the rest's horizontal centre
     over it. A mesh that is nothing but flat parts has no ground.
     """
-    level = [p for p in parts if len(p.points) >= 3 and is_flat(p.points, FLATNESS)
-             and abs(principal_frame(p.points)[1][2, 1]) >= np.cos(np.deg2rad(MAX_TILT_DEG))]
+    normals = [flat_normal(p.points, FLATNESS) if len(p.points) >= 3 else None for p in parts]
+    level = [p for p, n in zip(parts, normals) if n is not None and abs(n[1]) >= np.cos(np.deg2rad(MAX_TILT_DEG))]
     rest = [p for p in parts if all(p is not q for q in level)]
     out = np.zeros(face_count, bool)
     if not level or not rest:

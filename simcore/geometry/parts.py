@@ -37,9 +37,16 @@ def surface_parts(vertices: np.ndarray, faces: np.ndarray) -> list[SurfacePart]:
     part_area = np.bincount(face_label, weights=area, minlength=count)
     used = np.zeros(len(welded.vertices), bool)
     used[welded.faces.ravel()] = True
-    parts = [SurfacePart(welded.vertices[(label == k) & used], np.flatnonzero(face_label == k), float(part_area[k]))
-             for k in range(count)]
+    points = _split(welded.vertices[used], label[used], count)  # one sort each, not a pass per part
+    face_ids = _split(np.arange(len(f)), face_label, count)
+    parts = [SurfacePart(points[k], face_ids[k], float(part_area[k])) for k in range(count)]
     return sorted((p for p in parts if len(p.points)), key=lambda p: -p.area)
+
+
+def _split(values: np.ndarray, label: np.ndarray, count: int) -> list[np.ndarray]:
+    """values grouped by their label in [0, count): one array per label, in the values' order."""
+    order = np.argsort(label, kind="stable")
+    return np.split(values[order], np.cumsum(np.bincount(label, minlength=count))[:-1])
 
 
 def principal_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -51,10 +58,11 @@ def principal_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     return centre, axes, (points - centre) @ axes.T
 
 
-def is_flat(points: np.ndarray, ratio: float) -> bool:
-    """Thinner than `ratio` × its length along its principal axes."""
-    extent = np.ptp(principal_frame(points)[2], axis=0)
-    return bool(extent[0] > 0 and extent[2] < ratio * extent[0])
+def flat_normal(points: np.ndarray, ratio: float) -> np.ndarray | None:
+    """(3,) unit normal of points thinner than `ratio` × their length along their principal axes, else None."""
+    _, axes, local = principal_frame(points)
+    extent = np.ptp(local, axis=0)
+    return axes[2] if extent[0] > 0 and extent[2] < ratio * extent[0] else None
 
 
 def bulk_size(parts: list[SurfacePart], share: float = 0.9) -> float:

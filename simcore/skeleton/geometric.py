@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from scipy import ndimage
 from scipy.sparse.csgraph import dijkstra
 
-from simcore.geometry.parts import SurfacePart, is_flat, principal_frame, surface_parts
+from simcore.geometry.parts import SurfacePart, flat_normal, principal_frame, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.graph_simplify import branch_joints, branches, merge_junctions, prune_spurs
 from simcore.skeleton.medial import MedialForest, medial_forest
@@ -181,7 +181,7 @@ def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_join
     """
     total = sum(p.area for p in parts)
     deciding = [p.points for p in parts if p.area >= SHEET_PART_AREA * total] or [parts[0].points]
-    if not all(is_flat(points, ratio) for points in deciding):
+    if any(flat_normal(points, ratio) is None for points in deciding):
         return None
     pts = np.unique(np.concatenate(deciding), axis=0)
     centre, axes, local = principal_frame(pts)

@@ -59,6 +59,11 @@ class HumanoidFit:
     skeleton: Skeleton | None
     report: dict[str, Any] = field(default_factory=dict)
 
+    @property
+    def biped_layout(self) -> bool:
+        """A head, two feet and two arms were found (the detection checks ran), whether or not the fit passed."""
+        return "checks" in self.report
+
 
 @dataclass
 class _Tree:

@@ -71,7 +71,7 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
         fit = fit_humanoid(v, f, max_joints=max_joints, up_axis=up_axis, forward_axis=forward_axis,
                            force=method == "humanoid")
         tries = parts_to_try_without(v, f) if fit.skeleton is None else []  # a sword held up, a skirt
-        if "checks" not in fit.report:  # no biped layout at all (a quadruped): one try, without all of them
+        if not fit.biped_layout:  # no biped layout at all (a quadruped): one try, without all of them
             tries = tries[-1:]
         for prop in tries:
             rest = referenced_mesh(v, f[~prop])

@@ -48,8 +48,12 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     )
     w = result.weights  # columns of the kept joints → columns of the whole skeleton
     weights = sp.csr_matrix((w.data, kept[w.indices], w.indptr), shape=(w.shape[0], state.skeleton.num_joints))
-    ground_only = np.setdiff1d(state.mesh.faces[ground], state.mesh.faces[~ground])
-    state.weights = bind_to_joint(weights, ground_only, 0)  # joint 0 is the root (parents come first)
+    on_body = np.zeros(len(state.mesh.vertices), bool)
+    on_body[state.mesh.faces[~ground]] = True
+    on_ground = np.zeros(len(state.mesh.vertices), bool)
+    on_ground[state.mesh.faces[ground]] = True
+    # joint 0 is the root (parents come first)
+    state.weights = bind_to_joint(weights, np.flatnonzero(on_ground & ~on_body), 0)
     stats = weight_stats(state.weights)
     if stats["unweighted_vertices"]:
         state.warn(f"{stats['unweighted_vertices']} vertices received no skinning weight")
