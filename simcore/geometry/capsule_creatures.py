@@ -28,15 +28,16 @@ def soup(skeleton: Skeleton, radii: dict[int, float], count: int = 12) -> tuple[
     return np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
 
 
-def quadruped(count: int = 12) -> tuple[np.ndarray, np.ndarray, Skeleton]:
-    """A dog-like soup 1.9 m long (+X forward, +Y up) and its 13-joint skeleton; `count` sets tessellation."""
+def quadruped(count: int = 12, *, trunk: float = 0.45, girth: float = 0.16) -> tuple[np.ndarray, np.ndarray, Skeleton]:
+    """A dog-like soup (+X forward, +Y up) and its 13-joint skeleton: hips and shoulders `trunk` m either side of
+    the middle, a chest capsule of radius `girth` (the default dog is 1.9 m long); `count` sets tessellation."""
     named = {
-        "pelvis": ((-0.45, 0.6, 0.0), None), "chest": ((0.45, 0.6, 0.0), "pelvis"),
-        "neck": ((0.7, 0.9, 0.0), "chest"), "head": ((0.95, 0.9, 0.0), "neck"),
-        "tail": ((-0.95, 0.75, 0.0), "pelvis"),
+        "pelvis": ((-trunk, 0.6, 0.0), None), "chest": ((trunk, 0.6, 0.0), "pelvis"),
+        "neck": ((trunk + 0.25, 0.9, 0.0), "chest"), "head": ((trunk + 0.5, 0.9, 0.0), "neck"),
+        "tail": ((-trunk - 0.5, 0.75, 0.0), "pelvis"),
     }
     for side, z in (("l", 0.13), ("r", -0.13)):
-        for end, x in (("front", 0.45), ("back", -0.45)):
+        for end, x in (("front", trunk), ("back", -trunk)):
             top = "chest" if end == "front" else "pelvis"
             named[f"{end}_{side}_knee"] = ((x + 0.05, 0.3, z), top)
             named[f"{end}_{side}_foot"] = ((x, 0.05, z), f"{end}_{side}_knee")
@@ -44,7 +45,7 @@ def quadruped(count: int = 12) -> tuple[np.ndarray, np.ndarray, Skeleton]:
     skeleton = Skeleton(np.array([named[n][0] for n in names]), np.array([names.index(named[n][1]) if named[n][1] else -1 for n in names]), names)
     radii = {}
     for c, n in enumerate(names):
-        radii[c] = 0.16 if n == "chest" else 0.1 if n in ("neck", "head") else 0.05 if n == "tail" else 0.06
+        radii[c] = girth if n == "chest" else 0.1 if n in ("neck", "head") else 0.05 if n == "tail" else 0.06
     v, f = soup(skeleton, radii, count)
     return v, f, skeleton
 

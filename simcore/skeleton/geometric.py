@@ -18,6 +18,7 @@ from scipy.sparse.csgraph import dijkstra
 from simcore.geometry.parts import SurfacePart, flat_normal, principal_frame, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.graph_simplify import branch_joints, branches, merge_junctions, prune_spurs
+from simcore.skeleton.hub_split import HubSplit, mirror_plane, split_hubs
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.types import JointKind, Skeleton
 
@@ -60,11 +61,18 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
     adjacency, pos, rad = forest.adjacency, forest.positions, forest.radius
     keys, brs = branches(adjacency, nodes)
     rep, merged, brs = merge_junctions(keys, brs, adjacency, pos, rad, params.merge_ratio)
+    split = HubSplit(rep, merged, brs, [])
+    if len(brs) >= 4:  # a hub has at least four branches
+        split = split_hubs(rep, merged, brs, pos, rad, mirror_plane(pos[nodes]), len(pos))
+    rep, merged, brs = split.rep, split.merged, split.branches
     if len(brs) == 1:  # a tube (no junction): like a sheet, it bends only where segments are longer than it is thick
         spacing = max(spacing, params.tube_ratio * 2.0 * float(np.max(rad[brs[0].nodes])))
     base = len(graph.positions)
     slot: dict[int, int] = {}
+    used = {rep[k] for b in brs for k in (b.start, b.end)} | {k for link in split.links for k in link}
     for r in sorted(set(rep.values())):
+        if brs and r not in used:  # a hub that was split into junctions along the spine
+            continue
         slot[r] = len(graph.positions)
         graph.positions.append(merged[r])
         graph.body.append(body)
@@ -77,6 +85,7 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
             graph.body.append(body)
         chain.append(slot[rep[b.end]])
         graph.edges += list(zip(chain[:-1], chain[1:]))
+    graph.edges += [(slot[a], slot[b]) for a, b in split.links]
     return len(graph.positions) - base
 
 
