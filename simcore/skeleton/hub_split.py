@@ -5,10 +5,9 @@ or the wings and the legs, run diagonally through the trunk and meet at one poin
 single joint would carry every limb. Rigs hang each limb pair from its own joint on the spine (shoulders,
 hips). A hub is split when all its branches are either mirror pairs (left/right limbs, matched across the
 body's mirror plane) or lie on that plane (spine, neck, tail), and the pairs leave the trunk at two or more
-places along it. Each limb branch
-starts where it leaves the trunk (its medial radius falls below LIMB_RADIUS × the hub's); each pair gets a
-junction at that point's projection on the spine line, and the spine branches continue from the end
-junctions. Everything else is left as thinning gave it.
+places along it. Each limb branch starts where it leaves the trunk (its medial radius falls below
+LIMB_RADIUS × the hub's); each pair gets a junction at that point's projection on the spine line, and the
+spine branches continue from the end junctions. Everything else is left as thinning gave it.
 """
 
 from __future__ import annotations
