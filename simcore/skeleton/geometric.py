@@ -246,15 +246,17 @@ def _medial_length(forest: MedialForest) -> float:
 
 
 def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64,
-                       params: GeometricParams = GeometricParams()) -> tuple[Skeleton, dict]:
+                       params: GeometricParams = GeometricParams(),
+                       parts: list[SurfacePart] | None = None) -> tuple[Skeleton, dict]:
     """Skeleton of a triangle soup by medial thinning.
 
-    vertices: (V, 3) float64 metres (any frame; the result is in the same frame), faces: (F, 3) int64.
+    vertices: (V, 3) float64 metres (any frame; the result is in the same frame), faces: (F, 3) int64;
+    parts: surface_parts(vertices, faces) when the caller has them already.
     Returns (Skeleton with JointKind.FREE joints named `root`, `joint001`…, report dict). Deterministic.
     """
     v = np.asarray(vertices, dtype=np.float64)
     scale = float(np.ptp(v, axis=0).max()) or 1.0
-    chain = sheet_chain(surface_parts(v, faces), params.sheet_ratio, params.spacing * scale, max_joints)
+    chain = sheet_chain(parts if parts is not None else surface_parts(v, faces), params.sheet_ratio, params.spacing * scale, max_joints)
     if chain is not None:
         names = ["root"] + [f"joint{k:03d}" for k in range(1, len(chain))]
         parents = np.arange(-1, len(chain) - 1, dtype=np.int64)

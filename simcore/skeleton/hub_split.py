@@ -126,7 +126,7 @@ def _split(centre: np.ndarray, hub_radius: float, paths: list[list[int]], positi
     if len(levels) < 2:  # every pair joins at one point anyway: nothing to split
         return None
     t_level = [float(np.mean(t_pair[level])) for level in levels]
-    branches: list[tuple[int, list[int]]] = [(0, [])] * len(paths)
+    branches: dict[int, tuple[int, list[int]]] = {}  # incident branch → (junction slot, nodes from the hub side)
     for slot, level in enumerate(levels):
         for p in level:
             for a in pairs[p]:
@@ -137,7 +137,7 @@ def _split(centre: np.ndarray, hub_radius: float, paths: list[list[int]], positi
         side = 1.0 if t_nodes[-1] >= 0 else -1.0
         beyond = [n for n, t in zip(paths[a], t_nodes) if side * t > side * t_level[slot]]
         branches[a] = (slot, beyond or paths[a][-1:])
-    return _Split([centre + t * along for t in t_level], branches)
+    return _Split([centre + t * along for t in t_level], [branches[a] for a in range(len(paths))])
 
 
 def _limb_start(path: list[int], radius: np.ndarray, hub_radius: float) -> int:

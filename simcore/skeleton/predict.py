@@ -9,6 +9,7 @@ from typing import Any, Literal
 import numpy as np
 
 from simcore.errors import InvalidInput
+from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.geometry.referenced import referenced_mesh
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.props import parts_to_try_without
@@ -64,13 +65,16 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
     v, f = _check_mesh(vertices, faces)
     timings: dict[str, float] = {}
     report: dict[str, Any] = {"requested": method}
+    parts: list[SurfacePart] | None = None  # connected parts, found once for the retries and the geometric method
     if method in ("auto", "humanoid"):
         from simcore.skeleton.humanoid import fit_humanoid
 
         started = time.perf_counter()
         fit = fit_humanoid(v, f, max_joints=max_joints, up_axis=up_axis, forward_axis=forward_axis,
                            force=method == "humanoid")
-        tries = parts_to_try_without(v, f) if fit.skeleton is None else []  # a sword held up, a skirt
+        if fit.skeleton is None:
+            parts = surface_parts(v, f)
+        tries = parts_to_try_without(parts, len(f)) if parts is not None else []  # a sword held up, a skirt
         if not fit.biped_layout:  # no biped layout at all (a quadruped): one try, without all of them
             tries = tries[-1:]
         for prop in tries:
@@ -87,7 +91,7 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
             report["timings_s"] = timings
             return SkeletonPrediction(fit.skeleton, "humanoid", report)
     started = time.perf_counter()
-    skeleton, geo_report = geometric_skeleton(v, f, max_joints=max_joints)
+    skeleton, geo_report = geometric_skeleton(v, f, max_joints=max_joints, parts=parts)
     timings["geometric"] = round(time.perf_counter() - started, 3)
     report["geometric"] = geo_report
     report["timings_s"] = timings

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.geometry.parts import surface_parts
+from simcore.geometry.parts import SurfacePart
 
 PROTRUSION = 0.05  # × the model's size: how far a part must reach beyond all the others to be tried away
 SHELL_SHARE = 0.5  # the part with the most area is tried away when the others hold at least this share
@@ -18,13 +18,12 @@ MAX_SINGLE = 3  # parts tried one at a time; then all of them at once
 MAX_LEFT_OUT = 0.4  # share of the area: a bigger part (a second character beside the first) is never left out
 
 
-def parts_to_try_without(vertices: np.ndarray, faces: np.ndarray) -> list[np.ndarray]:
+def parts_to_try_without(parts: list[SurfacePart], face_count: int) -> list[np.ndarray]:
     """(F,) bool face masks to fit again without, in order: up to MAX_SINGLE single parts (the largest part
     when the others hold SHELL_SHARE of the area, so it may be a shell over them; then those reaching beyond
     every other part, farthest first), then their union when there are several; never more than MAX_LEFT_OUT
     of the area.
-    vertices: (V, 3) float, faces: (F, 3) int."""
-    parts = surface_parts(vertices, faces)
+    parts: the mesh's connected parts (surface_parts) over its `face_count` triangles."""
     if len(parts) < 2:
         return []
     lo = np.array([p.points.min(axis=0) for p in parts])
@@ -37,7 +36,7 @@ def parts_to_try_without(vertices: np.ndarray, faces: np.ndarray) -> list[np.nda
     chosen = [k for k in chosen if area[k] <= MAX_LEFT_OUT][:MAX_SINGLE]
     masks = []
     for k in chosen:
-        mask = np.zeros(len(np.asarray(faces).reshape(-1, 3)), bool)
+        mask = np.zeros(face_count, bool)
         mask[parts[k].faces] = True
         masks.append(mask)
     union = [np.logical_or.reduce(masks)] if len(masks) > 1 and area[chosen].sum() <= MAX_LEFT_OUT else []

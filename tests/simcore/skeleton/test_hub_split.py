@@ -52,6 +52,7 @@ def _x_hub(extra_branch: bool) -> tuple[dict, dict, list[Branch], np.ndarray, np
 
 def test_split_gives_one_junction_per_pair_and_hangs_the_spine_from_the_end_one():
     rep, merged, branch_list, positions, radius = _x_hub(extra_branch=False)
+    before = (dict(rep), {k: p.copy() for k, p in merged.items()}, [Branch(b.start, b.end, list(b.nodes)) for b in branch_list])
     split = split_hubs(rep, merged, branch_list, positions, radius, MirrorPlane(2, 0.0), len(positions))
     assert len(split.links) == 1
     back, front = sorted(split.links[0], key=lambda key: split.merged[key][0])
@@ -59,7 +60,8 @@ def test_split_gives_one_junction_per_pair_and_hangs_the_spine_from_the_end_one(
     starts = [b.start for b in split.branches]
     assert starts == [front, front, back, back, front]  # legs by side, the spine (+x) from the front junction
     assert all(radius[b.nodes[0]] < 0.6 for b in split.branches[:4])  # limbs start where they leave the trunk
-    assert rep == {k: k for k in rep} and 0 in rep and len(rep) == 6  # inputs untouched
+    assert rep == before[0] and branch_list == before[2]  # inputs untouched
+    assert merged.keys() == before[1].keys() and all(np.array_equal(merged[k], before[1][k]) for k in merged)
 
 
 def test_hub_with_a_branch_that_has_no_mirror_partner_is_left_alone():

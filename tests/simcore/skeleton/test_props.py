@@ -7,6 +7,7 @@ import pytest
 import trimesh
 
 from simcore.geometry.capsule_creatures import capsule_between, stick_humanoid
+from simcore.geometry.parts import surface_parts
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.props import parts_to_try_without
 from simcore.skinning.predict import compute_weights
@@ -26,7 +27,7 @@ def swordsman() -> tuple[np.ndarray, np.ndarray, int]:
 def test_the_sword_is_the_part_that_sticks_out(swordsman) -> None:
     vertices, faces, first = swordsman
     sword = np.arange(len(faces)) >= np.flatnonzero((faces >= first).all(axis=1))[0]
-    masks = parts_to_try_without(vertices, faces)  # the capsule soup's own parts come with it
+    masks = parts_to_try_without(surface_parts(vertices, faces), len(faces))  # the capsule soup's own parts come with it
     assert any(np.array_equal(mask, sword) for mask in masks)
 
 
@@ -60,6 +61,6 @@ def test_a_part_inside_the_silhouette_is_not_tried_away() -> None:
     belt = capsule_between(np.array([-0.15, 0.95, 0.0]), np.array([0.15, 0.95, 0.0]), 0.03)  # within the body's box
     both = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), belt])
     belt_faces = np.arange(len(faces), len(both.faces))
-    assert not any(mask[belt_faces].any() for mask in parts_to_try_without(both.vertices, both.faces))
+    assert not any(mask[belt_faces].any() for mask in parts_to_try_without(surface_parts(both.vertices, both.faces), len(both.faces)))
     one_piece = capsule_between(np.array([0.0, 0.2, 0.0]), np.array([0.0, 1.5, 0.0]), 0.2)
-    assert parts_to_try_without(one_piece.vertices, one_piece.faces) == []
+    assert parts_to_try_without(surface_parts(one_piece.vertices, one_piece.faces), len(one_piece.faces)) == []
