@@ -1,51 +1,28 @@
-"""Shortest paths through the occupied voxels of a grid (26 neighbours, Euclidean steps), compiled and GIL-free.
+"""Shortest paths through the occupied voxels of a grid (26 neighbours, Euclidean steps), vectorised in numpy.
 
 Each search (one per joint, or one from all joints at once) may be bounded per voxel: it settles a voxel only
 while its distance there is within that voxel's `bound`. In geodesic binding the bound is a multiple of the
 voxel's distance to its nearest joint, beyond which a joint's weight is negligible, so each joint explores its
-own neighbourhood instead of the whole solid (3–8× fewer voxel visits on the dev rigs). The searches walk the
-grid directly, with no graph built. Numba compiles the loop once per machine (cached on disk); searches are
-split across threads, which run in parallel because the loop holds no GIL.
+own neighbourhood instead of the whole solid (3–8× fewer voxel visits on the dev rigs).
+
+The searches are Dial's bucketed Dijkstra run on every (search, voxel) pair at once. With buckets one voxel
+pitch wide (the shortest step), no voxel can improve another of its own bucket, so a whole bucket is settled
+and expanded in one vectorised step: the distances are Dijkstra's exactly (bit-identical to the binary-heap
+search this replaced, on every dev rig). It needs no compiled code, so a fresh process pays no JIT load
+(numba's import and cached-kernel load were ~0.4 s of every process). The searches are split across threads
+(numpy's gathers and comparisons release the GIL): 1.4–1.6× faster on 2 cores.
 """
 
 from __future__ import annotations
 
-import heapq
 import itertools
 from concurrent.futures import ThreadPoolExecutor
 
-import numba
 import numpy as np
 
 from simcore.cores import usable_cores
 
 _OFFSETS = np.array([o for o in itertools.product((-1, 0, 1), repeat=3) if o != (0, 0, 0)], dtype=np.int64)
-
-
-@numba.njit(cache=True, nogil=True)
-def _search(ids, flat, delta, steps, src_ptr, src_voxel, src_length, bound, searches, out):  # pragma: no cover - compiled
-    """Dijkstra (binary heap, lazy deletion) for each search in `searches`, writing out[search, voxel]."""
-    for s in searches:
-        dist = out[s]
-        heap = [(0.0, np.int64(0))]
-        heap.pop()
-        for k in range(src_ptr[s], src_ptr[s + 1]):
-            v, d = src_voxel[k], src_length[k]
-            if d < dist[v] and d <= bound[v]:
-                dist[v] = d
-                heapq.heappush(heap, (d, v))
-        while heap:
-            d, v = heapq.heappop(heap)
-            if d > dist[v]:
-                continue
-            for k in range(len(delta)):
-                u = ids[flat[v] + delta[k]]
-                if u < 0:
-                    continue
-                nd = d + steps[k]
-                if nd < dist[u] and nd <= bound[u]:
-                    dist[u] = nd
-                    heapq.heappush(heap, (nd, u))
 
 
 class VoxelPaths:
@@ -56,13 +33,16 @@ class VoxelPaths:
 
     def __init__(self, occupancy: np.ndarray, pitch: float):
         self.ijk = np.argwhere(occupancy)
+        n = len(self.ijk)
         padded = np.full(np.asarray(occupancy.shape) + 2, -1, dtype=np.int64)  # an empty layer: no wrap-around
-        padded[tuple((self.ijk + 1).T)] = np.arange(len(self.ijk))
+        padded[tuple((self.ijk + 1).T)] = np.arange(n)
         self.ids = padded[1:-1, 1:-1, 1:-1]
-        self._ids_flat = padded.ravel()
-        self._flat = np.ravel_multi_index(tuple((self.ijk + 1).T), padded.shape)
-        self._delta = np.ravel_multi_index(tuple((_OFFSETS + 1).T), padded.shape) - np.ravel_multi_index((1, 1, 1), padded.shape)
+        flat = np.ravel_multi_index(tuple((self.ijk + 1).T), padded.shape)
+        delta = np.ravel_multi_index(tuple((_OFFSETS + 1).T), padded.shape) - np.ravel_multi_index((1, 1, 1), padded.shape)
+        neighbours = padded.ravel()[flat[:, None] + delta[None, :]]
+        self._neighbours = np.where(neighbours >= 0, neighbours, n)  # (n, 26); n = no voxel there
         self._steps = np.linalg.norm(_OFFSETS, axis=1) * pitch
+        self._pitch = float(pitch)
 
     def distances(self, group: np.ndarray, voxel: np.ndarray, length: np.ndarray, count: int, bound: np.ndarray | None = None) -> np.ndarray:
         """(n, count) float64 shortest distances from each group of sources; inf where unreached or past `bound`.
@@ -71,13 +51,59 @@ class VoxelPaths:
         bound: (n,) per-voxel limit, None = unbounded.
         """
         n = len(self.ijk)
-        order = np.argsort(group, kind="stable")
-        src_ptr = np.concatenate([[0], np.cumsum(np.bincount(group, minlength=count))]).astype(np.int64)
-        out = np.full((count, n), np.inf)
-        limit = np.full(n, np.inf) if bound is None else np.asarray(bound, dtype=np.float64)
-        args = (self._ids_flat, self._flat, self._delta, self._steps, src_ptr, voxel[order].astype(np.int64),
-                length[order].astype(np.float64), limit)
+        limit = np.full(n + 1, -np.inf)  # the "no voxel" slot passes no bound
+        limit[:n] = np.inf if bound is None else bound
+        group = np.asarray(group, dtype=np.int64)
+        voxel = np.asarray(voxel, dtype=np.int64)
+        length = np.asarray(length, dtype=np.float64)
         threads = max(1, min(usable_cores(), count))
-        with ThreadPoolExecutor(max_workers=threads) as pool:  # searches interleaved: big and small ones mixed
-            list(pool.map(lambda t: _search(*args, np.arange(t, count, threads, dtype=np.int64), out), range(threads)))
-        return out.T
+        out = np.empty((n, count))
+
+        def run(first: int) -> None:  # searches first, first + threads, ... (big and small ones mixed)
+            mine = group % threads == first
+            out[:, first::threads] = self._search(group[mine] // threads, voxel[mine], length[mine],
+                                                  len(range(first, count, threads)), limit)
+
+        with ThreadPoolExecutor(max_workers=threads) as pool:
+            list(pool.map(run, range(threads)))
+        return out
+
+    def _search(self, group: np.ndarray, voxel: np.ndarray, length: np.ndarray, count: int, limit: np.ndarray) -> np.ndarray:
+        """(n, count) distances of `count` searches in one thread; limit: (n + 1,) bounds, -inf in the last slot."""
+        n = len(self.ijk)
+        dist = np.full(count * n + 1, np.inf)  # pair (search s, voxel v) at s·n + v; the last slot is never set
+        settled = np.zeros(count * n, bool)
+        stamp = np.empty(count * n, np.int64)
+        ok = length <= limit[voxel]
+        pairs = group[ok] * n + voxel[ok]
+        np.minimum.at(dist, pairs, length[ok])
+        buckets: dict[int, list[np.ndarray]] = {}
+        self._file(buckets, pairs, dist[pairs], 0)
+        while buckets:
+            k = min(buckets)
+            parts = buckets.pop(k)
+            cur = np.concatenate(parts) if len(parts) > 1 else parts[0]
+            order = np.arange(len(cur))
+            stamp[cur] = order
+            cur = cur[(stamp[cur] == order) & ~settled[cur]]  # once each, and only pairs not settled earlier
+            settled[cur] = True
+            v = cur % n
+            near = self._neighbours[v]  # (m, 26)
+            nd = dist[cur][:, None] + self._steps
+            target = near + (cur - v)[:, None]
+            better = (nd <= limit[near]) & (nd < dist[target])
+            target, nd = target[better], nd[better]
+            np.minimum.at(dist, target, nd)
+            self._file(buckets, target, nd, k + 1)
+        return dist[:-1].reshape(count, n).T
+
+    def _file(self, buckets: dict[int, list[np.ndarray]], pairs: np.ndarray, d: np.ndarray, first: int) -> None:
+        """Put `pairs` in the buckets of their distances `d` (never before bucket `first`: rounding)."""
+        key = np.maximum(np.floor(d / self._pitch).astype(np.int64), first)
+        if len(key) == 0:
+            return
+        lo, hi = int(key.min()), int(key.max())
+        for k in range(lo, hi + 1) if hi - lo < 4 else np.unique(key).tolist():
+            mine = pairs[key == k]
+            if len(mine):
+                buckets.setdefault(k, []).append(mine)

@@ -1,4 +1,4 @@
-"""The compiled voxel shortest paths against scipy's Dijkstra on the same 26-neighbour graph."""
+"""The vectorised voxel shortest paths against scipy's Dijkstra on the same 26-neighbour graph."""
 
 from __future__ import annotations
 
