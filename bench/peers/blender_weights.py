@@ -107,6 +107,29 @@ def ensure_venv() -> Path:
     return python
 
 
+def write_job(asset, job: Path):  # noqa: ANN001, ANN201 - RiggedAsset in, WeldedMesh out (imports stay lazy)
+    """Write the arrays Blender gets for `asset` to `job` (npz): the welded mesh (Blender's "merge by distance",
+    done here) and the skeleton. Returns the weld, whose `index` maps Blender's weights back to every vertex."""
+    import numpy as np  # noqa: PLC0415
+
+    from simcore.geometry.weld import weld_vertices  # noqa: PLC0415
+
+    s = asset.skeleton
+    welded = weld_vertices(asset.vertices, asset.faces)
+    np.savez(job, vertices=welded.vertices, faces=welded.faces, positions=s.positions, parents=s.parents, names=np.array(s.names))
+    return welded
+
+
+def run_job(python: Path, job: Path, out: Path) -> tuple[float, str | None]:
+    """Run Blender on `job` in a fresh process writing `out`; (wall seconds, error line or None)."""
+    started = time.perf_counter()
+    proc = subprocess.run([str(python), __file__, "--inner", str(job), str(out)], capture_output=True, text=True)
+    wall = time.perf_counter() - started
+    if proc.returncode != 0:
+        return wall, proc.stderr.strip().splitlines()[-1][:200] if proc.stderr.strip() else f"exit {proc.returncode}"
+    return wall, None
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("assets", nargs="?", default=str(HERE.parents[2] / "shared" / "assets" / "dev"))
@@ -121,7 +144,6 @@ def main() -> None:
 
     sys.path.insert(0, str(HERE.parents[1]))
     from simcore.evaluation.assets import rigged_assets  # noqa: PLC0415
-    from simcore.geometry.weld import weld_vertices  # noqa: PLC0415
 
     python = ensure_venv()
     out = Path(args.out)
@@ -130,14 +152,10 @@ def main() -> None:
     for name, _category, _doc, asset in rigged_assets(Path(args.assets)):
         with tempfile.TemporaryDirectory() as tmp:
             job = Path(tmp) / "job.npz"
-            s = asset.skeleton
-            welded = weld_vertices(asset.vertices, asset.faces)  # Blender's "merge by distance", done here
-            np.savez(job, vertices=welded.vertices, faces=welded.faces, positions=s.positions, parents=s.parents, names=np.array(s.names))
-            started = time.perf_counter()
-            proc = subprocess.run([str(python), __file__, "--inner", str(job), str(out / f"{name}.npz")], capture_output=True, text=True)
-            wall = time.perf_counter() - started
-        if proc.returncode != 0:
-            summary[name] = {"error": proc.stderr.strip().splitlines()[-1][:200] if proc.stderr.strip() else f"exit {proc.returncode}"}
+            welded = write_job(asset, job)
+            wall, error = run_job(python, job, out / f"{name}.npz")
+        if error:
+            summary[name] = {"error": error}
         else:
             result = np.load(out / f"{name}.npz")
             seconds = float(result["seconds"])
