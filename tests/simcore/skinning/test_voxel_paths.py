@@ -66,3 +66,13 @@ def test_bound_stops_a_search_and_keeps_what_it_reaches_exact(u_shape: np.ndarra
     assert 0 < inside.sum() < len(exact)
     np.testing.assert_allclose(got[inside], exact[inside])
     assert np.all(np.isinf(got[~inside]))
+
+
+def test_sources_that_start_buckets_apart_match_scipy(u_shape: np.ndarray) -> None:
+    # Starting lengths of several pitches put sources in later buckets than the first ones they compete with.
+    paths = VoxelPaths(u_shape, PITCH)
+    tip_a, tip_b, corner = paths.ids[1, 13, 1], paths.ids[7, 13, 1], paths.ids[1, 1, 1]
+    sources = [(0, tip_a, 0.37), (0, corner, 0.0), (0, tip_b, 0.9), (1, tip_b, 0.25), (1, paths.ids[7, 10, 1], 0.05)]
+    group, voxel, length = (np.array(c) for c in zip(*sources))
+    got = paths.distances(group, voxel, length, 2)
+    np.testing.assert_allclose(got, _reference(u_shape, sources, 2), atol=1e-9)
