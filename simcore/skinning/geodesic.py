@@ -22,7 +22,7 @@ from simcore.arrays import unique_ints
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
-from simcore.skinning.bones import closest_on_segments, joint_distances, joint_segments
+from simcore.skinning.bones import joint_distances, joint_segments, row_distances, segment_samples
 from simcore.skinning.postprocess import normalize_rows
 from simcore.skinning.voxel_paths import VoxelPaths
 
@@ -46,30 +46,33 @@ _CORNERS = np.array(list(itertools.product((0, 1), repeat=3)), dtype=np.int64)
 def _bone_sources(
     grid: VoxelGrid, ijk: np.ndarray, ids: np.ndarray, skeleton: Skeleton, leaf_extension: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(joint, voxel id, link length) for the voxels each joint's segments cross (nearest voxel when outside)."""
+    """(joint, voxel id, link length) for the voxels each joint's segments cross (nearest voxel when outside),
+    sorted by joint then voxel; the length is the voxel centre's distance to the joint's nearest segment."""
     seg = joint_segments(skeleton, leaf_extension)
-    tree: cKDTree | None = None
-    out_j, out_v, out_d = [], [], []
-    for j in range(skeleton.num_joints):
-        mine = seg.owner == j
-        heads, tails = seg.heads[mine], seg.tails[mine]
-        samples = []
-        for h, t in zip(heads, tails):
-            n = max(2, int(np.ceil(np.linalg.norm(t - h) / (0.5 * grid.pitch))) + 1)
-            samples.append(h + np.linspace(0.0, 1.0, n)[:, None] * (t - h))
-        pts = np.concatenate(samples)
-        vox = grid.index_of(pts)
-        vox = vox[grid.in_bounds(vox)]
-        vid = unique_ints(ids[tuple(vox.T)]) if len(vox) else np.zeros(0, np.int64)
-        vid = vid[vid >= 0]
-        if len(vid) == 0:  # bone outside the solid (thin part, or a joint placed off the mesh): nearest voxels
-            tree = tree or cKDTree(grid.centers(ijk))
-            vid = np.unique(tree.query(pts, k=1)[1])
-        dist = closest_on_segments(grid.centers(ijk[vid]), heads, tails)[0].min(axis=1)
-        out_j.append(np.full(len(vid), j))
-        out_v.append(vid)
-        out_d.append(dist)
-    return np.concatenate(out_j), np.concatenate(out_v), np.concatenate(out_d)
+    n, joints = len(ijk), skeleton.num_joints
+    points, owner = segment_samples(seg, 0.5 * grid.pitch)
+    owner = seg.owner[owner]
+    vox = grid.index_of(points)
+    vid = np.full(len(points), -1, np.int64)
+    inside = grid.in_bounds(vox)
+    vid[inside] = ids[tuple(vox[inside].T)]
+    keys = [owner[vid >= 0] * n + vid[vid >= 0]]
+    lost = np.setdiff1d(np.arange(joints), owner[vid >= 0])
+    if len(lost):  # bones outside the solid (thin part, or a joint placed off the mesh): their nearest voxels
+        mine = np.isin(owner, lost)
+        keys.append(owner[mine] * n + cKDTree(grid.centers(ijk)).query(points[mine], k=1)[1])
+    keys = unique_ints(np.concatenate(keys))
+    sj, sv = keys // n, keys % n
+    # Each source's distance to the nearest segment of its joint (segments come grouped by joint).
+    first = np.searchsorted(seg.owner, np.arange(joints))
+    count = np.bincount(seg.owner, minlength=joints)
+    centres = grid.centers(ijk[sv])
+    sd = np.full(len(sj), np.inf)
+    for k in range(int(count.max())):
+        rows = np.flatnonzero(count[sj] > k)
+        s = first[sj[rows]] + k
+        sd[rows] = np.minimum(sd[rows], row_distances(centres[rows], seg.heads[s], seg.tails[s]))
+    return sj, sv, sd
 
 
 def geodesic_distances(

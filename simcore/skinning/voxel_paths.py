@@ -34,13 +34,13 @@ class VoxelPaths:
     def __init__(self, occupancy: np.ndarray, pitch: float):
         self.ijk = np.argwhere(occupancy)
         n = len(self.ijk)
-        padded = np.full(np.asarray(occupancy.shape) + 2, -1, dtype=np.int64)  # an empty layer: no wrap-around
-        padded[tuple((self.ijk + 1).T)] = np.arange(n)
-        self.ids = padded[1:-1, 1:-1, 1:-1]
-        flat = np.ravel_multi_index(tuple((self.ijk + 1).T), padded.shape)
-        delta = np.ravel_multi_index(tuple((_OFFSETS + 1).T), padded.shape) - np.ravel_multi_index((1, 1, 1), padded.shape)
-        neighbours = padded.ravel()[flat[:, None] + delta[None, :]]
-        self._neighbours = np.where(neighbours >= 0, neighbours, n)  # (n, 26); n = no voxel there
+        shape = np.asarray(occupancy.shape) + 2  # an empty layer all round: no wrap-around
+        padded = np.full(shape, n, dtype=np.int64)  # n = no voxel there
+        inner = padded[1:-1, 1:-1, 1:-1]
+        inner[occupancy] = np.arange(n)  # C order, as argwhere
+        self.ids = np.where(occupancy, inner, -1)
+        strides = np.array([shape[1] * shape[2], shape[2], 1])
+        self._neighbours = padded.ravel()[((self.ijk + 1) @ strides)[:, None] + _OFFSETS @ strides]  # (n, 26)
         self._steps = np.linalg.norm(_OFFSETS, axis=1) * pitch
         self._pitch = float(pitch)
 
