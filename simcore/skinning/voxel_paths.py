@@ -22,6 +22,7 @@ import numpy as np
 
 from simcore.cores import usable_cores
 
+BATCH_PAIRS = 8_000_000
 _OFFSETS = np.array([o for o in itertools.product((-1, 0, 1), repeat=3) if o != (0, 0, 0)], dtype=np.int64)
 
 
@@ -56,16 +57,18 @@ class VoxelPaths:
         group = np.asarray(group, dtype=np.int64)
         voxel = np.asarray(voxel, dtype=np.int64)
         length = np.asarray(length, dtype=np.float64)
-        threads = max(1, min(usable_cores(), count))
+        # Searches run in batches, interleaved so big and small ones mix; a batch holds at most BATCH_PAIRS
+        # (search, voxel) pairs, which bounds the working arrays (~17 bytes a pair) for rigs of many joints.
+        batches = max(1, min(count, max(usable_cores(), -(-count * n // BATCH_PAIRS))))
         out = np.empty((n, count))
 
-        def run(first: int) -> None:  # searches first, first + threads, ... (big and small ones mixed)
-            mine = group % threads == first
-            out[:, first::threads] = self._search(group[mine] // threads, voxel[mine], length[mine],
-                                                  len(range(first, count, threads)), limit)
+        def run(first: int) -> None:  # searches first, first + batches, ...
+            mine = group % batches == first
+            out[:, first::batches] = self._search(group[mine] // batches, voxel[mine], length[mine],
+                                                  len(range(first, count, batches)), limit)
 
-        with ThreadPoolExecutor(max_workers=threads) as pool:
-            list(pool.map(run, range(threads)))
+        with ThreadPoolExecutor(max_workers=min(batches, usable_cores())) as pool:
+            list(pool.map(run, range(batches)))
         return out
 
     def _search(self, group: np.ndarray, voxel: np.ndarray, length: np.ndarray, count: int, limit: np.ndarray) -> np.ndarray:

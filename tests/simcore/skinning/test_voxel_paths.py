@@ -76,3 +76,15 @@ def test_sources_that_start_buckets_apart_match_scipy(u_shape: np.ndarray) -> No
     group, voxel, length = (np.array(c) for c in zip(*sources))
     got = paths.distances(group, voxel, length, 2)
     np.testing.assert_allclose(got, _reference(u_shape, sources, 2), atol=1e-9)
+
+
+def test_many_small_batches_give_the_same_distances(u_shape: np.ndarray, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A rig of many joints runs its searches in several memory-bounded batches; the result must not change.
+    paths = VoxelPaths(u_shape, PITCH)
+    rng = np.random.default_rng(3)
+    sources = [(g, int(v), float(d)) for g, v, d in zip(range(7), rng.choice(len(paths.ijk), 7, replace=False), rng.uniform(0, 0.2, 7))]
+    group, voxel, length = (np.array(c) for c in zip(*sources))
+    whole = paths.distances(group, voxel, length, 7)
+    monkeypatch.setattr("simcore.skinning.voxel_paths.BATCH_PAIRS", 2 * len(paths.ijk))  # 4 batches
+    np.testing.assert_array_equal(paths.distances(group, voxel, length, 7), whole)
+    np.testing.assert_allclose(whole, _reference(u_shape, sources, 7), atol=1e-9)
