@@ -45,6 +45,7 @@ def _inner(job: Path, out: Path) -> None:
 
 
 def _ours_process(job: Path, out: Path) -> float:
+    """Wall seconds of one fresh process of ours on `job` (see `_inner`)."""
     started = time.perf_counter()
     subprocess.run([sys.executable, __file__, "--inner", str(job), str(out)], check=True)
     return time.perf_counter() - started

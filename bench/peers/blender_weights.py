@@ -26,6 +26,11 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the project's types; its modules are imported lazily (the bpy venv has none of them)
+    from simcore.geometry.weld import WeldedMesh
+    from simcore.io.gltf_rig import RiggedAsset
 
 HERE = Path(__file__).resolve().parent
 VENV = HERE / ".venv-blender"
@@ -107,7 +112,7 @@ def ensure_venv() -> Path:
     return python
 
 
-def write_job(asset, job: Path):  # noqa: ANN001, ANN201 - RiggedAsset in, WeldedMesh out (imports stay lazy)
+def write_job(asset: RiggedAsset, job: Path) -> WeldedMesh:
     """Write the arrays Blender gets for `asset` to `job` (npz): the welded mesh (Blender's "merge by distance",
     done here) and the skeleton. Returns the weld, whose `index` maps Blender's weights back to every vertex."""
     import numpy as np  # noqa: PLC0415

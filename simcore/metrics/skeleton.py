@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from simcore.geometry.segments import segment_points
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.io.gltf_rig import RiggedAsset, used_joints
 from simcore.skeleton.tokenizer import Normalization
@@ -83,12 +84,7 @@ def bone_points(positions: np.ndarray, edges: np.ndarray, step: float = BONE_STE
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     if len(edges) == 0:
         return positions
-    heads, tails = positions[edges[:, 0]], positions[edges[:, 1]]
-    counts = np.maximum(2, np.ceil(np.linalg.norm(tails - heads, axis=1) / step).astype(np.int64) + 1)
-    bone = np.repeat(np.arange(len(edges)), counts)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    t = (np.arange(counts.sum()) - np.repeat(starts, counts)) / np.repeat(counts - 1, counts)
-    samples = heads[bone] + t[:, None] * (tails[bone] - heads[bone])
+    samples, _ = segment_points(positions[edges[:, 0]], positions[edges[:, 1]], step)
     return np.concatenate([positions, samples])
 
 

@@ -62,22 +62,6 @@ def closest_on_segments(points: np.ndarray, heads: np.ndarray, tails: np.ndarray
     return dist, t
 
 
-def row_distances(points: np.ndarray, heads: np.ndarray, tails: np.ndarray) -> np.ndarray:
-    """(N,) float64 distance from each point (N, 3) to the segment in the same row of heads/tails (N, 3)."""
-    d = tails - heads
-    rel = points - heads
-    t = np.clip((rel * d).sum(axis=1) / np.maximum((d * d).sum(axis=1), 1e-30), 0.0, 1.0)
-    return np.linalg.norm(rel - t[:, None] * d, axis=1)
-
-
-def segment_samples(segments: JointSegments, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Points (N, 3) along every segment, ends included, at most `spacing` apart, and (N,) each one's segment."""
-    count = np.maximum(2, np.ceil(np.linalg.norm(segments.tails - segments.heads, axis=1) / spacing).astype(np.int64) + 1)
-    seg = np.repeat(np.arange(len(count)), count)
-    t = (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) / (count[seg] - 1)
-    return segments.heads[seg] + t[:, None] * (segments.tails[seg] - segments.heads[seg]), seg
-
-
 def joint_distances(points: np.ndarray, segments: JointSegments, num_joints: int) -> np.ndarray:
     """(N, J) float64 Euclidean distance from each point to the nearest segment of each joint."""
     dist, _ = closest_on_segments(points, segments.heads, segments.tails)

@@ -19,10 +19,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from simcore.arrays import unique_ints
+from simcore.geometry.segments import row_distances, segment_points
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
-from simcore.skinning.bones import joint_distances, joint_segments, row_distances, segment_samples
+from simcore.skinning.bones import joint_distances, joint_segments
 from simcore.skinning.postprocess import normalize_rows
 from simcore.skinning.voxel_paths import VoxelPaths
 
@@ -50,14 +51,15 @@ def _bone_sources(
     sorted by joint then voxel; the length is the voxel centre's distance to the joint's nearest segment."""
     seg = joint_segments(skeleton, leaf_extension)
     n, joints = len(ijk), skeleton.num_joints
-    points, owner = segment_samples(seg, 0.5 * grid.pitch)
-    owner = seg.owner[owner]
+    points, segment = segment_points(seg.heads, seg.tails, 0.5 * grid.pitch)
+    owner = seg.owner[segment]
     vox = grid.index_of(points)
     vid = np.full(len(points), -1, np.int64)
     inside = grid.in_bounds(vox)
     vid[inside] = ids[tuple(vox[inside].T)]
-    keys = [owner[vid >= 0] * n + vid[vid >= 0]]
-    lost = np.setdiff1d(np.arange(joints), owner[vid >= 0])
+    hit = vid >= 0
+    keys = [owner[hit] * n + vid[hit]]
+    lost = np.setdiff1d(np.arange(joints), owner[hit])
     if len(lost):  # bones outside the solid (thin part, or a joint placed off the mesh): their nearest voxels
         mine = np.isin(owner, lost)
         keys.append(owner[mine] * n + cKDTree(grid.centers(ijk)).query(points[mine], k=1)[1])
