@@ -227,11 +227,11 @@ def _closed_solid(v: np.ndarray, faces: np.ndarray, params: GeometricParams) -> 
     Returns (grid, medial forest, close radius used). Unsupervised: no ground truth, one criterion for all meshes.
     """
     grid = solid_voxels(v, faces, resolution=params.resolution, close_radius=params.close_radius)
-    forest = medial_forest(grid)
+    forest = medial_forest(grid, restore_limbs=True)
     if params.close_retry <= params.close_radius:
         return grid, forest, params.close_radius
     closed = solid_voxels(v, faces, resolution=params.resolution, close_radius=params.close_retry)
-    closed_forest = medial_forest(closed)
+    closed_forest = medial_forest(closed, restore_limbs=True)
     shorter = _medial_length(closed_forest) < (1.0 - params.close_drop) * _medial_length(forest)
     if shorter and grid.inside(closed_forest.positions).mean() >= params.close_inside:
         return closed, closed_forest, params.close_retry
@@ -305,6 +305,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         "close_radius": closing,
         "voxel_pitch": grid.pitch,
         "medial_voxels": int(len(forest.positions)),
+        "limbs_restored": base.restored,
         "spur_voxels_pruned": int(len(removed)),
         "bodies": len(kept),
         "bodies_ignored": len(ranked) - len(kept),

@@ -185,7 +185,10 @@ def test_cavity_in_a_body_is_closed_so_the_skeleton_runs_through_the_body():
     looped, looped_report = geometric_skeleton(mesh.vertices, mesh.faces, params=GeometricParams(close_retry=1))
     assert report["close_radius"] == 2 and looped_report["close_radius"] == 1
     assert looped.positions[:, 1].min() < -0.05  # without the retry, thinning traces round the jaw
-    assert skeleton.positions[:, 1].min() > 0.0  # with it, one chain through the head
+    # With it, one chain through the head; only its end may dip into the filled jaw's corner (a restored limb).
+    assert np.bincount(skeleton.parents[1:], minlength=skeleton.num_joints).max() == 1
+    below = skeleton.positions[skeleton.positions[:, 1] < 0.0]
+    assert len(below) <= 1 and (below[:, 0] < 0.15).all()
     assert skeleton.num_joints < looped.num_joints
     assert solid_voxels(mesh.vertices, mesh.faces, resolution=report["resolution"]).inside(skeleton.positions).all()
 
