@@ -26,11 +26,11 @@ LENGTH_RATIO = 3.0  # a region reaching farther than this × its radius beyond t
 MIN_RADIUS = 2.0  # voxels: thinner regions (ear and finger tips) are left to the tip handling
 
 
-def lost_limb_tips(paths: VoxelPaths, depth: np.ndarray, medial: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def lost_limb_tips(paths: VoxelPaths, depth: np.ndarray, medial: np.ndarray) -> np.ndarray:
     """The far ends of the lost limbs.
 
     paths: the solid's voxels (pitch 1, so distances are in voxels); depth: (n,) each voxel's distance to the
-    outside, voxels; medial: (m,) voxel ids of the thinned voxels. Returns ((k,) tip voxel ids, (n,) excess).
+    outside, voxels; medial: (m,) voxel ids of the thinned voxels. Returns (k,) tip voxel ids.
     """
     top = float(depth.max())
     # One search from every medial voxel at once, started at top - radius so the result minus top is the excess.
@@ -48,7 +48,7 @@ def lost_limb_tips(paths: VoxelPaths, depth: np.ndarray, medial: np.ndarray) -> 
         radius = float(depth[members[excess[members] > 0.5 * reach]].max())  # the outer half: the limb's own
         if radius >= MIN_RADIUS and reach > LENGTH_RATIO * radius:
             tips.append(int(members[np.argmax(excess[members])]))
-    return np.asarray(tips, np.int64), excess
+    return np.asarray(tips, np.int64)
 
 
 def restore_lost_limbs(occupancy: np.ndarray, thin: np.ndarray, depth: np.ndarray) -> tuple[np.ndarray, int]:
@@ -61,7 +61,7 @@ def restore_lost_limbs(occupancy: np.ndarray, thin: np.ndarray, depth: np.ndarra
     if len(medial) == 0:
         return thin, 0
     voxel_depth = depth[tuple(paths.ijk.T)]
-    tips, _ = lost_limb_tips(paths, voxel_depth, medial)
+    tips = lost_limb_tips(paths, voxel_depth, medial)
     if len(tips) == 0:
         return thin, 0
     graph = voxel_graph(paths.ijk, weight_scale=voxel_depth**2)  # deep voxels are cheap: the path stays centred
