@@ -19,7 +19,7 @@ from scipy import ndimage
 from scipy.sparse.csgraph import dijkstra
 
 from simcore.geometry.voxel_graph import voxel_graph
-from simcore.skinning.voxel_paths import VoxelPaths
+from simcore.geometry.voxel_paths import VoxelPaths
 
 REGION_EXCESS = 1.5  # voxels beyond the medial balls where a region starts (voxel rounding stays below)
 LENGTH_RATIO = 3.0  # a region reaching farther than this × its radius beyond the balls is a limb

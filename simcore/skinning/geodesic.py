@@ -25,7 +25,7 @@ from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import joint_distances, joint_segments
 from simcore.skinning.postprocess import normalize_rows
-from simcore.skinning.voxel_paths import VoxelPaths
+from simcore.geometry.voxel_paths import VoxelPaths
 
 ALPHA = 0.5  # Dionne & de Lasa falloff mix between 1/d and 1/d² (the paper's and UniRig's value)
 # Measured on the dev rigs (L1 vs artist weights, four issue assets): the plain falloff (sharpness 1) is far

@@ -9,7 +9,7 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from simcore.skinning.voxel_paths import VoxelPaths
+from simcore.geometry.voxel_paths import VoxelPaths
 
 PITCH = 0.1
 
@@ -85,6 +85,6 @@ def test_many_small_batches_give_the_same_distances(u_shape: np.ndarray, monkeyp
     sources = [(g, int(v), float(d)) for g, v, d in zip(range(7), rng.choice(len(paths.ijk), 7, replace=False), rng.uniform(0, 0.2, 7))]
     group, voxel, length = (np.array(c) for c in zip(*sources))
     whole = paths.distances(group, voxel, length, 7)
-    monkeypatch.setattr("simcore.skinning.voxel_paths.BATCH_PAIRS", 2 * len(paths.ijk))  # 4 batches
+    monkeypatch.setattr("simcore.geometry.voxel_paths.BATCH_PAIRS", 2 * len(paths.ijk))  # 4 batches
     np.testing.assert_array_equal(paths.distances(group, voxel, length, 7), whole)
     np.testing.assert_allclose(whole, _reference(u_shape, sources, 7), atol=1e-9)
