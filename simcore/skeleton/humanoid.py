@@ -7,8 +7,9 @@ their product is the confidence. Facing comes from the toes (feet point forward)
 is up × forward (Mixamo: facing +Z with +Y up puts the left hand at +X).
 
 Joint placement follows the medial paths, with proportions measured on Mixamo characters (fractions along
-the spine between Hips and Neck, along the arm from shoulder to fingertip, knee halfway between hip and
-ankle, ankle at the foot's corner); a placed body whose bones stray from the medial tree lowers the
+the spine between Hips and Neck, along the lower arm to the fingertip, knee halfway between hip and ankle, ankle
+at the foot's corner); the upper-arm joint goes where the arm's medial radius falls to the arm's own (it leaves
+the torso); a placed body whose bones stray from the medial tree lowers the
 confidence. Long medial branches the template leaves out (wings, tails) become SPRING chains
 (`extra_limbs`). Joints that land outside the solid are moved to the nearest inside voxel.
 """
@@ -40,8 +41,13 @@ UP_ORDER = ("y", "z", "-y", "-z", "x", "-x")  # glTF's +Y first: it wins ties
 CONFIDENT = 0.5
 RESOLUTION = 112
 SPINE_FRACTIONS = {"Spine": 0.21, "Spine1": 0.435, "Spine2": 0.67}  # of Hips → Neck, Mixamo characters
-ARM_FRACTIONS = {"ForeArm": 0.35, "Hand": 0.71}  # of shoulder joint → fingertip
-SHOULDER_REACH = 2.0  # shoulder joint: this many chest radii out along the arm from the spine
+# Elbow and wrist: fractions of the arm's medial path from LOWER_ARM_FROM chest radii out from the spine to the
+# fingertip (Mixamo characters).
+ARM_FRACTIONS = {"ForeArm": 0.35, "Hand": 0.71}
+LOWER_ARM_FROM = 2.0
+# The upper-arm joint sits where the arm leaves the torso: the first point along the arm's medial path whose ball
+# radius is down to ARM_EXIT × the arm's own radius (the median over the middle half of the path).
+ARM_EXIT = 1.5
 HIPS_ABOVE_CROTCH = 0.01  # × height: Hips sits just above where the leg branches meet
 FUSED_CROTCH = 0.4  # a leg split below this share of the height means the thighs are fused in the voxels
 NECK_AT, HEAD_AT = 0.17, 0.35  # of shoulder line → head top (mean of Mixamo Xbot and Soldier)
@@ -238,6 +244,12 @@ def _facing(tree: _Tree, biped: _Biped, leg_paths: list[list[int]], lateral: np.
     return (side_normal if total >= 0 else -side_normal), abs(total) / reach
 
 
+def _arm_exit(radius: np.ndarray) -> int:
+    """Index along an arm's medial path (spine → fingertip, ball radii `radius`) where it leaves the torso."""
+    arm = float(np.median(radius[len(radius) // 4: max(3 * len(radius) // 4, len(radius) // 4 + 1)]))
+    return int(np.argmax(radius <= ARM_EXIT * arm))
+
+
 def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarray) -> dict[str, np.ndarray]:
     up, floor, height = biped.up, biped.floor, biped.height
     j: dict[str, np.ndarray] = {}
@@ -253,15 +265,15 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
     for side, (hand, attach) in sides.items():
         path = _up_path(biped.parent, hand, stop=attach)[::-1]  # attach → fingertip
         pts = _to_tip(tree, path)
-        reach = max(SHOULDER_REACH * float(tree.radius[attach]), 0.05 * height)
         arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-        shoulder_at = float(np.clip(reach / max(arc[-1], 1e-9), 0.05, 0.4))
-        arm = point_at_fraction(pts, shoulder_at)
-        rest = pts[np.searchsorted(arc, shoulder_at * arc[-1]):]
-        rest = np.vstack([arm, rest]) if len(rest) else np.vstack([arm, pts[-1]])
-        j[f"{side}Arm"] = arm
+        reach = max(LOWER_ARM_FROM * float(tree.radius[attach]), 0.05 * height)
+        lower_from = float(np.clip(reach / max(arc[-1], 1e-9), 0.05, 0.4))
+        rest = pts[np.searchsorted(arc, lower_from * arc[-1]):]
+        rest = np.vstack([point_at_fraction(pts, lower_from), rest if len(rest) else pts[-1:]])
         for name, frac in ARM_FRACTIONS.items():
             j[f"{side}{name}"] = point_at_fraction(rest, frac)
+        arm = point_at_fraction(pts, float(np.clip(arc[_arm_exit(tree.radius[path])] / max(arc[-1], 1e-9), 0.05, 0.4)))
+        j[f"{side}Arm"] = arm
         j[f"{side}Shoulder"] = pts[0] + 0.35 * (arm - pts[0]) + 0.01 * height * up
         arm_h.append(float(arm @ up))
     shoulder_h = float(np.mean(arm_h))

@@ -8,7 +8,7 @@ import pytest
 from simcore.geometry.capsule_creatures import quadruped, stick_humanoid
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
-from simcore.skeleton.humanoid import fit_humanoid, fit_residual
+from simcore.skeleton.humanoid import _arm_exit, fit_humanoid, fit_residual
 from simcore.skeleton.mixamo import BODY_JOINTS, full_name
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import JointKind
@@ -65,6 +65,32 @@ def test_dev_mixamo_characters_get_joints_near_their_own(dev_assets, asset):
     for name in ("LeftHand", "RightHand", "LeftFoot", "RightFoot", "Neck", "LeftArm", "RightLeg"):
         err = np.linalg.norm(joint(prediction.skeleton, name) - truth[full_name(name)]) / scale
         assert err < 0.06, (name, err)
+
+
+UPPER_ARMS = {  # each rig's own upper-arm joints (the first joint of each arm below the spine or clavicle)
+    "xbot.glb": ("mixamorig:LeftArm", "mixamorig:RightArm"),
+    "soldier.glb": ("mixamorig:LeftArm", "mixamorig:RightArm"),
+    "cesium_man.glb": ("Skeleton_arm_joint_L__4_", "Skeleton_arm_joint_R"),
+    "rigged_figure.glb": ("arm_joint_L_1", "arm_joint_R_1"),
+}
+
+
+@pytest.mark.parametrize("asset", sorted(UPPER_ARMS))
+def test_upper_arm_joints_sit_where_the_arms_leave_the_torso(dev_assets, asset):
+    """Two chest radii out along the arm (the rule before) put them 0.06-0.07 × size too far out on all but Xbot."""
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / asset).read_bytes()))
+    scale = np.ptp(rig.vertices, axis=0).max()
+    skeleton = predict_skeleton(rig.vertices, rig.faces, method="humanoid").skeleton
+    ours = np.stack([joint(skeleton, "LeftArm"), joint(skeleton, "RightArm")])
+    for name in UPPER_ARMS[asset]:
+        err = np.linalg.norm(ours - rig.skeleton.positions[rig.skeleton.names.index(name)], axis=1).min() / scale
+        assert err < 0.035, (name, err)
+
+
+def test_arm_exit_is_where_the_medial_radius_falls_to_the_arms_own():
+    chest, arm = [0.10, 0.09, 0.07, 0.04], [0.03] * 8
+    assert _arm_exit(np.array(chest + arm)) == 3  # 0.04 <= 1.5 × 0.03 (the median over the middle half)
+    assert _arm_exit(np.array([0.03] * 10)) == 0  # no torso on the path: the arm starts at once
 
 
 def test_a_tail_becomes_a_spring_chain_under_the_template():
