@@ -9,9 +9,9 @@ is up × forward (Mixamo: facing +Z with +Y up puts the left hand at +X).
 Joint placement follows the medial paths, with proportions measured on Mixamo characters (fractions along
 the spine between Hips and Neck, along the lower arm to the fingertip, knee halfway between hip and ankle, ankle
 at the foot's corner); the upper-arm joint goes where the arm's medial radius falls to the arm's own (it leaves
-the torso); a placed body whose bones stray from the medial tree lowers the
-confidence. Long medial branches the template leaves out (wings, tails) become SPRING chains
-(`extra_limbs`). Joints that land outside the solid are moved to the nearest inside voxel.
+the torso). A placed body whose bones stray from the medial tree lowers the confidence. Long medial branches
+the template leaves out (wings, tails) become SPRING chains (`extra_limbs`). Joints that land outside the solid
+are moved to the nearest inside voxel.
 """
 
 from __future__ import annotations
