@@ -14,12 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simcore.skeleton.geometric import GeometricParams
 from simcore.skeleton.graph_simplify import branch_joints, path_length
 
 MIN_LENGTH = 0.35  # × height: shorter free branches are not limbs (dev: wings ≥ 0.4, armour spikes < 0.3)
-SPACING = 0.12  # × the mesh's longest side, as the geometric method
-TURN_RATIO, TURN_MIN = 0.6, 0.015  # Douglas-Peucker tolerance, as the geometric method
-TIP_PULL = 0.7  # as the geometric method
+_GEOMETRIC = GeometricParams()  # joint spacing, turning tolerance and tip pull: as the geometric method
+SPACING = _GEOMETRIC.spacing  # × the mesh's longest side
+TURN_RATIO, TURN_MIN = _GEOMETRIC.turn_ratio, _GEOMETRIC.turn_min  # Douglas-Peucker tolerance
+TIP_PULL = _GEOMETRIC.tip_pull
 
 
 @dataclass
