@@ -18,10 +18,7 @@ from simcore.skeleton.geometric import GeometricParams
 from simcore.skeleton.graph_simplify import branch_joints, path_length
 
 MIN_LENGTH = 0.35  # × height: shorter free branches are not limbs (dev: wings ≥ 0.4, armour spikes < 0.3)
-_GEOMETRIC = GeometricParams()  # joint spacing, turning tolerance and tip pull: as the geometric method
-SPACING = _GEOMETRIC.spacing  # × the mesh's longest side
-TURN_RATIO, TURN_MIN = _GEOMETRIC.turn_ratio, _GEOMETRIC.turn_min  # Douglas-Peucker tolerance
-TIP_PULL = _GEOMETRIC.tip_pull
+CHAIN = GeometricParams()  # joint spacing, turning tolerance and tip pull: as the geometric method
 
 
 @dataclass
@@ -63,11 +60,11 @@ def extra_limbs(pos: np.ndarray, radius: np.ndarray, adjacency: list[list[int]],
         if path_length(pos, path) < MIN_LENGTH * height:
             continue
         pts = pos[path[::-1]]  # branch point → tip
-        inner = branch_joints(pts, radius[path[::-1]], TURN_RATIO, TURN_MIN * scale, SPACING * scale)
+        inner = branch_joints(pts, radius[path[::-1]], CHAIN.turn_ratio, CHAIN.turn_min * scale, CHAIN.spacing * scale)
         keep = [i for i in inner if np.linalg.norm(pts[i] - pts[0]) > radius[path[-1]]]  # outside the body
         chain = pts[keep + [len(pts) - 1]].copy()
         if len(chain) >= 2:
-            chain[-1] += TIP_PULL * (chain[-2] - chain[-1])
+            chain[-1] += CHAIN.tip_pull * (chain[-2] - chain[-1])
         placed = np.concatenate(anchors)
         hang = int(np.argmin(np.linalg.norm(placed - pts[0], axis=1)))
         chains.append(ExtraChain(chain, hang))

@@ -250,6 +250,11 @@ def _arm_exit(radius: np.ndarray) -> int:
     return int(np.argmax(radius <= ARM_EXIT * arm))
 
 
+def _arm_share(length: float, total: float) -> float:
+    """`length` along an arm path `total` long, as a share kept between the first 5 % and 40 % of the arm."""
+    return float(np.clip(length / max(total, 1e-9), 0.05, 0.4))
+
+
 def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarray) -> dict[str, np.ndarray]:
     up, floor, height = biped.up, biped.floor, biped.height
     j: dict[str, np.ndarray] = {}
@@ -266,13 +271,12 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
         path = _up_path(biped.parent, hand, stop=attach)[::-1]  # attach → fingertip
         pts = _to_tip(tree, path)
         arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-        reach = max(LOWER_ARM_FROM * float(tree.radius[attach]), 0.05 * height)
-        lower_from = float(np.clip(reach / max(arc[-1], 1e-9), 0.05, 0.4))
+        lower_from = _arm_share(max(LOWER_ARM_FROM * float(tree.radius[attach]), 0.05 * height), arc[-1])
         rest = pts[np.searchsorted(arc, lower_from * arc[-1]):]
         rest = np.vstack([point_at_fraction(pts, lower_from), rest if len(rest) else pts[-1:]])
         for name, frac in ARM_FRACTIONS.items():
             j[f"{side}{name}"] = point_at_fraction(rest, frac)
-        arm = point_at_fraction(pts, float(np.clip(arc[_arm_exit(tree.radius[path])] / max(arc[-1], 1e-9), 0.05, 0.4)))
+        arm = point_at_fraction(pts, _arm_share(arc[_arm_exit(tree.radius[path])], arc[-1]))
         j[f"{side}Arm"] = arm
         j[f"{side}Shoulder"] = pts[0] + 0.35 * (arm - pts[0]) + 0.01 * height * up
         arm_h.append(float(arm @ up))

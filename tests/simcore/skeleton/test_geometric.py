@@ -46,6 +46,16 @@ def test_joints_lie_inside_the_solid(dog):
     assert grid.inside(skeleton.positions).all()
 
 
+def test_tips_pulled_out_of_the_solid_are_snapped_back_inside(dog):
+    from simcore.skeleton.geometric import GeometricParams
+
+    vertices, faces, _, _, report = dog
+    # A negative pull pushes every leaf a whole bone beyond its limb's end, out of the mesh.
+    pushed, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=-1.0))
+    grid = solid_voxels(vertices, faces, resolution=report["resolution"])
+    assert grid.inside(pushed.positions).all()
+
+
 def test_same_mesh_gives_the_same_skeleton(dog):
     vertices, faces, _, skeleton, _ = dog
     again, _ = geometric_skeleton(vertices.copy(), faces.copy())
