@@ -181,6 +181,14 @@ def branch_joints(points: np.ndarray, radius: np.ndarray, tolerance_ratio: float
     return sorted(set(i for i in out if 0 < i < len(points) - 1))
 
 
+def limb_exit(radius: np.ndarray, ratio: float) -> int:
+    """Index along a limb's medial path (body → tip, ball radii `radius`) where it leaves the body: the first node
+    whose radius is down to `ratio` × the limb's own (the median over the middle half of the path); 0 when the
+    path starts outside any body."""
+    own = float(np.median(radius[len(radius) // 4: max(3 * len(radius) // 4, len(radius) // 4 + 1)]))
+    return int(np.argmax(radius <= ratio * own))
+
+
 def rooted_parents(adjacency: list[list[int]], root: int) -> dict[int, int]:
     """Breadth-first parent of every node reachable from `root` (root → -1)."""
     parent = {root: -1}

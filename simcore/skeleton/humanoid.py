@@ -27,7 +27,7 @@ from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.extra_limbs import extra_limbs
 from simcore.skeleton.inside import snap_inside
-from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
+from simcore.skeleton.graph_simplify import limb_exit, path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.hands import fit_fingers
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
@@ -244,12 +244,6 @@ def _facing(tree: _Tree, biped: _Biped, leg_paths: list[list[int]], lateral: np.
     return (side_normal if total >= 0 else -side_normal), abs(total) / reach
 
 
-def _arm_exit(radius: np.ndarray) -> int:
-    """Index along an arm's medial path (spine → fingertip, ball radii `radius`) where it leaves the torso."""
-    arm = float(np.median(radius[len(radius) // 4: max(3 * len(radius) // 4, len(radius) // 4 + 1)]))
-    return int(np.argmax(radius <= ARM_EXIT * arm))
-
-
 def _arm_share(length: float, total: float) -> float:
     """`length` along an arm path `total` long, as a share kept between the first 5 % and 40 % of the arm."""
     return float(np.clip(length / max(total, 1e-9), 0.05, 0.4))
@@ -276,7 +270,7 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
         rest = np.vstack([point_at_fraction(pts, lower_from), rest if len(rest) else pts[-1:]])
         for name, frac in ARM_FRACTIONS.items():
             j[f"{side}{name}"] = point_at_fraction(rest, frac)
-        arm = point_at_fraction(pts, _arm_share(arc[_arm_exit(tree.radius[path])], arc[-1]))
+        arm = point_at_fraction(pts, _arm_share(arc[limb_exit(tree.radius[path], ARM_EXIT)], arc[-1]))
         j[f"{side}Arm"] = arm
         j[f"{side}Shoulder"] = pts[0] + 0.35 * (arm - pts[0]) + 0.01 * height * up
         arm_h.append(float(arm @ up))

@@ -8,7 +8,7 @@ import pytest
 from simcore.geometry.capsule_creatures import quadruped, stick_humanoid
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
-from simcore.skeleton.humanoid import _arm_exit, fit_humanoid, fit_residual
+from simcore.skeleton.humanoid import fit_humanoid, fit_residual
 from simcore.skeleton.mixamo import BODY_JOINTS, full_name
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import JointKind
@@ -86,11 +86,6 @@ def test_upper_arm_joints_sit_where_the_arms_leave_the_torso(dev_assets, asset):
         err = np.linalg.norm(ours - rig.skeleton.positions[rig.skeleton.names.index(name)], axis=1).min() / scale
         assert err < 0.035, (name, err)
 
-
-def test_arm_exit_is_where_the_medial_radius_falls_to_the_arms_own():
-    chest, arm = [0.10, 0.09, 0.07, 0.04], [0.03] * 8
-    assert _arm_exit(np.array(chest + arm)) == 3  # 0.04 <= 1.5 × 0.03 (the median over the middle half)
-    assert _arm_exit(np.array([0.03] * 10)) == 0  # no torso on the path: the arm starts at once
 
 
 def test_a_tail_becomes_a_spring_chain_under_the_template():
