@@ -18,7 +18,8 @@ from scipy.sparse.csgraph import dijkstra
 from simcore.geometry.parts import SurfacePart, flat_normal, principal_frame, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.graph_simplify import branch_joints, branches, limb_exit, merge_junctions, prune_spurs
-from simcore.skeleton.hub_split import HubSplit, mirror_plane, split_hubs
+from simcore.skeleton.hub_split import HubSplit, split_hubs
+from simcore.skeleton.mirror import mirror_plane
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.types import JointKind, Skeleton
@@ -34,6 +35,7 @@ class GeometricParams:
     resolution: int = 96  # voxels along the longest side
     spur_ratio: float = 2.0  # a leaf branch shorter than this × the junction radius is a surface bump
     spur_min: float = 0.02
+    twin_slender: float = 4.0  # mirror-twin spurs longer than this × their radius are both kept (fins), else both go
     merge_ratio: float = 1.5  # junctions closer than this × their radius are one junction
     turn_ratio: float = 0.6  # Douglas-Peucker tolerance, × the branch's median radius
     turn_min: float = 0.015
@@ -303,9 +305,12 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     kept = [c for c in ranked if comp_volume[c] >= params.min_part * total] or ranked[:1]
 
     spacing, spur_min = params.spacing * scale, params.spur_min * scale
+    plane = mirror_plane(base.positions[base.component == kept[0]])
     for _ in range(60):  # widen spacing, then prune longer spurs, then drop small bodies until the budget holds
         forest = MedialForest(base.positions, base.radius, [list(a) for a in base.adjacency], base.component)
-        removed = prune_spurs(forest.adjacency, forest.positions, forest.radius, params.spur_ratio, spur_min)
+        slender = params.twin_slender if spur_min <= params.spur_min * scale else np.inf  # the budget comes first
+        removed = prune_spurs(forest.adjacency, forest.positions, forest.radius, params.spur_ratio, spur_min,
+                              plane, slender)
         alive = np.ones(len(forest.positions), bool)
         alive[removed] = False
         graph = _JointGraph([], [], [])

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simcore.skeleton.mirror import MirrorPlane
+
 
 @dataclass
 class Branch:
@@ -52,32 +54,60 @@ def _remove_nodes(adjacency: list[list[int]], nodes: list[int]) -> None:
 
 
 def prune_spurs(adjacency: list[list[int]], positions: np.ndarray, radius: np.ndarray, ratio: float,
-                min_length: float) -> list[int]:
+                min_length: float, plane: MirrorPlane | None = None, slender: float = 4.0) -> list[int]:
     """Remove leaf branches shorter than `ratio` × the junction's radius + `min_length` (in place).
 
     Spurs come from surface bumps: a real limb is longer than the thickness of what it hangs off. Each pass
     removes at most one spur per junction (the shortest), so two real short branches cannot vanish together.
-    Returns the ids of the removed nodes.
+    With the body's mirror `plane`, two spurs of one junction that are each other's mirror image are decided
+    together: kept when both are slender (longer than `slender` × their median radius: fins, ears, horns), else
+    removed together. One at a time, the shorter would go and its twin would stay on as the junction's
+    continuation (a fish with one pectoral fin). Returns the ids of the removed nodes.
     """
     removed: list[int] = []
+    twins_kept: set[int] = set()  # leaves of slender mirror twins
     while True:
-        best: dict[int, tuple[float, list[int]]] = {}
+        spurs: dict[int, list[tuple[float, list[int]]]] = {}  # junction → (length, leaf → junction path)
         for leaf in range(len(adjacency)):
-            if len(adjacency[leaf]) != 1:
+            if len(adjacency[leaf]) != 1 or leaf in twins_kept:
                 continue
             path = _walk(adjacency, leaf, adjacency[leaf][0])
             end = path[-1]
-            if len(adjacency[end]) < 3:
-                continue
             length = path_length(positions, path)
-            if length < ratio * radius[end] + min_length and (end not in best or length < best[end][0]):
-                best[end] = (length, path[:-1])
-        if not best:
+            if len(adjacency[end]) >= 3 and length < ratio * radius[end] + min_length:
+                spurs.setdefault(end, []).append((length, path))
+        if not spurs:
             return removed
-        for end in sorted(best):
-            if len(adjacency[end]) >= 3:  # an earlier removal this pass may have lowered its degree
-                _remove_nodes(adjacency, best[end][1])
-                removed += best[end][1]
+        for end in sorted(spurs):
+            if len(adjacency[end]) < 3:  # an earlier removal this pass may have lowered its degree
+                continue
+            twins = _mirror_twins(spurs[end], positions, float(radius[end]), plane)
+            if twins is None:
+                doomed = [min(spurs[end], key=lambda spur: spur[0])[1]]
+            elif all(length >= slender * float(np.median(radius[path])) for length, path in twins):
+                twins_kept.update(path[0] for _, path in twins)
+                continue
+            else:
+                doomed = [path for _, path in twins]
+            for path in doomed:
+                _remove_nodes(adjacency, path[:-1])
+                removed += path[:-1]
+
+
+def _mirror_twins(spurs: list[tuple[float, list[int]]], positions: np.ndarray, tolerance: float,
+                  plane: MirrorPlane | None) -> list[tuple[float, list[int]]] | None:
+    """The first two of one junction's `spurs` whose leaves are mirror images across `plane` (within `tolerance`)
+    and not one leaf on the plane, or None."""
+    if plane is None or len(spurs) < 2:
+        return None
+    leaves = positions[[path[0] for _, path in spurs]]
+    mirrored = plane.reflect(leaves)
+    for a in range(len(spurs)):
+        for b in range(a + 1, len(spurs)):
+            if (np.linalg.norm(mirrored[a] - leaves[b]) < tolerance
+                    and np.linalg.norm(leaves[a] - leaves[b]) >= tolerance):
+                return [spurs[a], spurs[b]]
+    return None
 
 
 def branches(adjacency: list[list[int]], nodes: np.ndarray) -> tuple[list[int], list[Branch]]:

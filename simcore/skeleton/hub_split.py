@@ -15,36 +15,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from simcore.skeleton.graph_simplify import Branch
+from simcore.skeleton.mirror import MirrorPlane
 
 LIMB_RADIUS = 0.6  # a limb leaves the trunk where its medial radius drops below this share of the hub's
 MATCH = 0.5  # mirror partners (and on-plane branches) within this × the hub radius
 SAME_JOINT = 0.5  # pairs whose junctions are closer than this × the hub radius along the spine share one
-
-
-@dataclass(frozen=True)
-class MirrorPlane:
-    """The plane x[axis] = offset across which a body looks most like itself."""
-
-    axis: int
-    offset: float
-
-    def reflect(self, points: np.ndarray) -> np.ndarray:
-        """(N, 3) mirror images of `points` (N, 3)."""
-        out = np.array(points, dtype=np.float64, copy=True)
-        out[:, self.axis] = 2.0 * self.offset - out[:, self.axis]
-        return out
-
-
-def mirror_plane(points: np.ndarray) -> MirrorPlane:
-    """The axis-aligned plane through the centroid of `points` (N, 3) that maps them closest onto themselves
-    (least mean distance from each mirrored point to the nearest original)."""
-    tree = cKDTree(points)
-    centre = points.mean(axis=0)
-    planes = [MirrorPlane(axis, float(centre[axis])) for axis in range(3)]
-    return min(planes, key=lambda plane: float(tree.query(plane.reflect(points))[0].mean()))
 
 
 @dataclass

@@ -1,12 +1,16 @@
-"""Medial-path helpers: where a limb leaves the body, and the joint the geometric method puts there."""
+"""Medial-graph simplification: where a limb leaves the body (and the joint put there), spur pruning of mirror twins."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
-from simcore.skeleton.geometric import GeometricParams, _with_limb_root
-from simcore.skeleton.graph_simplify import limb_exit
+from simcore.io.gltf_document import GltfDocument
+from simcore.io.gltf_rig import read_rigged_asset
+from simcore.skeleton.geometric import GeometricParams, _with_limb_root, geometric_skeleton
+from simcore.skeleton.graph_simplify import limb_exit, prune_spurs
+from simcore.skeleton.mirror import MirrorPlane, mirror_plane
 
 
 def test_limb_exit_is_where_the_medial_radius_falls_to_the_limbs_own():
@@ -47,3 +51,44 @@ def test_no_limb_root_next_to_a_joint_near_the_tip_or_off_a_limb():
     assert _with_limb_root(nodes, [], adjacency, pos, rad, near_junction, spacing=0.2) == []
     chain = [[1]] + [[i - 1, i + 1] for i in range(1, 20)] + [[19], [], []]  # leaf to leaf: no junction, no limb
     assert _with_limb_root(nodes, [], chain, pos, rad, params, spacing=0.2) == []
+
+
+def _finned_trunk(fin_radius: float):
+    """A trunk (radius 0.2) along +z from node 0 to the junction node 9 at z = 0.9, and two fins 0.35 long out
+    of it along ±x (nodes 10-16 and 17-23): mirror images across x = 0, each shorter than the spur limit
+    (2 × 0.2 junction radius)."""
+    trunk = [(0.0, 0.0, 0.1 * k) for k in range(10)]
+    fins = [(s * 0.05 * k, 0.0, 0.9) for s in (-1.0, 1.0) for k in range(1, 8)]
+    positions = np.array(trunk + fins)
+    radius = np.array([0.2] * 10 + [fin_radius] * 14)
+    adjacency = [[1]] + [[k - 1, k + 1] for k in range(1, 9)] + [[8, 10, 17]]
+    for first in (10, 17):
+        adjacency += [[9 if k == first else k - 1] + ([k + 1] if k < first + 6 else []) for k in range(first, first + 7)]
+    return adjacency, positions, radius
+
+
+def _prune(fin_radius: float, plane: MirrorPlane | None) -> set[int]:
+    adjacency, positions, radius = _finned_trunk(fin_radius)
+    return set(prune_spurs(adjacency, positions, radius, 2.0, 0.0, plane))
+
+
+def test_slender_mirror_twin_spurs_are_both_kept():
+    assert _prune(0.05, MirrorPlane(0, 0.0)) == set()  # 0.35 long >= 4 × 0.05: a pair of fins
+
+
+def test_stubby_mirror_twin_spurs_are_both_removed():
+    assert _prune(0.1, MirrorPlane(0, 0.0)) == set(range(10, 24))  # 0.35 < 4 × 0.1: bumps
+
+
+def test_without_a_mirror_plane_one_twin_goes_and_the_other_stays_as_the_continuation():
+    assert _prune(0.05, None) == set(range(10, 17))  # the old one-at-a-time rule: a one-finned fish
+
+
+def test_the_fishs_two_pectoral_fins_are_both_rigged(dev_assets):
+    """rignet_11814_fish's pectoral fins are spur-length twins off one junction: both get bones, so its skeleton
+    is its own mirror image (it kept only one fin while spurs were pruned one at a time)."""
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / "rignet_11814_fish.glb").read_bytes()))
+    skeleton, _ = geometric_skeleton(rig.vertices, rig.faces)
+    plane = mirror_plane(rig.vertices)
+    size = float(np.ptp(rig.vertices, axis=0).max())
+    assert cKDTree(skeleton.positions).query(plane.reflect(skeleton.positions))[0].max() < 0.05 * size  # was 0.146

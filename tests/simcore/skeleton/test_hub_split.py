@@ -7,7 +7,8 @@ import numpy as np
 from simcore.geometry.capsule_creatures import quadruped
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.graph_simplify import Branch
-from simcore.skeleton.hub_split import MirrorPlane, mirror_plane, split_hubs
+from simcore.skeleton.hub_split import split_hubs
+from simcore.skeleton.mirror import MirrorPlane, mirror_plane
 
 
 def _leg_junction(skeleton, foot: int) -> int:
