@@ -19,9 +19,10 @@ from simcore.geometry.parts import SurfacePart, flat_normal, principal_frame, su
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.graph_simplify import branch_joints, branches, limb_exit, merge_junctions, prune_spurs
 from simcore.skeleton.hub_split import HubSplit, split_hubs
-from simcore.skeleton.mirror import mirror_plane
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
+from simcore.skeleton.mirror import mirror_plane
+from simcore.skeleton.symmetry import symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
 
@@ -333,10 +334,12 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     occupied = grid.centers(np.argwhere(np.isin(body_labels, main_labels)))
     root = _choose_root(pos, edges, main, occupied.mean(axis=0))
     order, parents = _rooted_order(len(pos), edges, root, pos)
-    pos = snap_inside(grid, _pull_tips(pos[order], parents, params.tip_pull))  # a tip pulled across a bend
+    pos = _pull_tips(pos[order], parents, params.tip_pull)
     if np.count_nonzero(parents == 0) == 1:  # a chain's root is its end: thinning stopped a radius short of it
         depth = base.radius[int(np.argmin(np.linalg.norm(base.positions - pos[0], axis=1)))]
         pos[0] = _extend_end(pos[0], pos[np.flatnonzero(parents == 0)[0]], params.root_push * depth)
+    pos, mirror = symmetrize(pos, parents, grid, v)
+    pos = snap_inside(grid, pos)  # a tip pulled across a bend, a joint averaged with its mirror twin
     names = ["root"] + [f"joint{k:03d}" for k in range(1, len(pos))]
     skeleton = Skeleton(pos, parents, names, [JointKind.FREE] * len(pos)).validate()
     report = {
@@ -351,5 +354,6 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         "bodies_joined": joined,
         "joints": skeleton.num_joints,
         "spacing": spacing,
+        "mirror": mirror,
     }
     return skeleton, report

@@ -24,13 +24,14 @@ from scipy.spatial import cKDTree
 
 from simcore.errors import InvalidInput
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
-from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.extra_limbs import extra_limbs
-from simcore.skeleton.inside import snap_inside
+from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.graph_simplify import limb_exit, path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.hands import fit_fingers
+from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
+from simcore.skeleton.symmetry import symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
 AXES: dict[str, np.ndarray] = {
@@ -432,7 +433,8 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
             parents.append(chain.parent if i == 0 else first + i - 1)
         added += 1
     report["extra_limbs"] = added
-    pos = snap_inside(grid, np.asarray(positions))
+    pos, report["mirror"] = symmetrize(np.asarray(positions), np.asarray(parents), grid, v)
+    pos = snap_inside(grid, pos)
     skeleton = Skeleton(pos, np.asarray(parents), names, kinds).validate()
     report.update(detected=True, facing=_facing_label(forward), facing_vector=np.round(forward, 4).tolist(),
                   facing_confidence=round(facing_conf, 3), joints=skeleton.num_joints)
