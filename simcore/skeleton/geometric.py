@@ -22,7 +22,7 @@ from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.mirror import mirror_plane
-from simcore.skeleton.symmetry import symmetrize
+from simcore.skeleton.symmetry import lopsided_branches, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
 
@@ -210,6 +210,12 @@ def _pull_tips(pos: np.ndarray, parents: np.ndarray, share: float) -> np.ndarray
     return out
 
 
+def _free_skeleton(positions: np.ndarray, parents: np.ndarray) -> Skeleton:
+    """A validated Skeleton of FREE joints named `root`, `joint001`, … in order."""
+    names = ["root"] + [f"joint{k:03d}" for k in range(1, len(positions))]
+    return Skeleton(positions, parents, names, [JointKind.FREE] * len(positions)).validate()
+
+
 def _extend_end(end: np.ndarray, inner: np.ndarray, distance: float) -> np.ndarray:
     """(3,) `end` moved `distance` further along the direction from `inner` to `end`."""
     step = end - inner
@@ -295,10 +301,8 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     scale = float(np.ptp(v, axis=0).max()) or 1.0
     chain = sheet_chain(parts if parts is not None else surface_parts(v, faces), params.sheet_ratio, params.spacing * scale, max_joints)
     if chain is not None:
-        names = ["root"] + [f"joint{k:03d}" for k in range(1, len(chain))]
         parents = np.arange(-1, len(chain) - 1, dtype=np.int64)
-        chain = _pull_tips(chain, parents, params.tip_pull)
-        skeleton = Skeleton(chain, parents, names, [JointKind.FREE] * len(chain)).validate()
+        skeleton = _free_skeleton(_pull_tips(chain, parents, params.tip_pull), parents)
         return skeleton, {"sheet": True, "joints": skeleton.num_joints, "bodies": 1}
     grid, base, closing = _closed_solid(v, faces, params)
     ranked, comp_volume, body_labels = rank_bodies(grid, base)
@@ -338,10 +342,17 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     if np.count_nonzero(parents == 0) == 1:  # a chain's root is its end: thinning stopped a radius short of it
         depth = base.radius[int(np.argmin(np.linalg.norm(base.positions - pos[0], axis=1)))]
         pos[0] = _extend_end(pos[0], pos[np.flatnonzero(parents == 0)[0]], params.root_push * depth)
-    pos, mirror = symmetrize(pos, parents, grid, v)
+    twins = mirror_twins(pos, parents, grid, v)
+    if twins is not None:
+        pos = symmetrize(pos, twins)
     pos = snap_inside(grid, pos)  # a tip pulled across a bend, a joint averaged with its mirror twin
-    names = ["root"] + [f"joint{k:03d}" for k in range(1, len(pos))]
-    skeleton = Skeleton(pos, parents, names, [JointKind.FREE] * len(pos)).validate()
+    skeleton, mirror = _free_skeleton(pos, parents), mirror_report(None)
+    if twins is not None:
+        drop = lopsided_branches(pos, parents, twins, grid)
+        if drop.any():
+            rest = skeleton.without(drop)[0]
+            skeleton = _free_skeleton(rest.positions, rest.parents)
+        mirror = mirror_report(twins, int(np.count_nonzero(drop[1:] & ~drop[parents[1:]])))
     report = {
         "resolution": params.resolution,
         "close_radius": closing,

@@ -31,7 +31,7 @@ from simcore.skeleton.hands import fit_fingers
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
-from simcore.skeleton.symmetry import symmetrize
+from simcore.skeleton.symmetry import mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
 AXES: dict[str, np.ndarray] = {
@@ -433,8 +433,10 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
             parents.append(chain.parent if i == 0 else first + i - 1)
         added += 1
     report["extra_limbs"] = added
-    pos, report["mirror"] = symmetrize(np.asarray(positions), np.asarray(parents), grid, v)
-    pos = snap_inside(grid, pos)
+    pos = np.asarray(positions)
+    twins = mirror_twins(pos, np.asarray(parents), grid, v)
+    report["mirror"] = mirror_report(twins)
+    pos = snap_inside(grid, pos if twins is None else symmetrize(pos, twins))
     skeleton = Skeleton(pos, np.asarray(parents), names, kinds).validate()
     report.update(detected=True, facing=_facing_label(forward), facing_vector=np.round(forward, 4).tolist(),
                   facing_confidence=round(facing_conf, 3), joints=skeleton.num_joints)

@@ -1,48 +1,94 @@
-"""Mirror-symmetric joints for mirror-symmetric meshes.
+"""Mirror-symmetric skeletons for mirror-symmetric meshes.
 
 Artists' rigs of symmetric characters are symmetric (so poses and animations can be mirrored); voxel thinning
-and template fitting are not quite: a knee lands a voxel lower on one side, a spine joint beside the mid-plane.
-When the mesh is its own mirror image across an axis-aligned plane, joints are paired with their mirror twins
-and each is averaged with its twin's mirror image; a joint that is its own twin goes onto the plane. Twins are
-matched globally (one-to-one, least total cost), the cost of a pair being how far each joint's mirror image is
-from the other plus the same for their parents, so a knee pairs with the other knee, not with a foot tip pulled
-close to it. Topology is left as it is.
+and template fitting are not quite: a knee lands a voxel lower on one side, a spine joint beside the mid-plane,
+a spur is pruned on one side and kept on the other. When the mesh is its own mirror image across an axis-aligned
+plane, joints are paired with their mirror twins: matched globally (one-to-one, least total cost), the cost of a
+pair being how far each joint's mirror image is from the other plus the same for their parents, so a knee pairs
+with the other knee, not with a foot tip pulled close to it. Each twin is averaged with its twin's mirror image
+and a joint that is its own twin goes onto the plane; a branch of two or more joints with no twins, where the
+body has the same part on the other side, is dropped (the other side's was pruned as a spur there).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from simcore.geometry.voxelize import VoxelGrid
-from simcore.skeleton.mirror import solid_mirror
+from simcore.skeleton.mirror import MirrorPlane, solid_mirror
 
 SYMMETRIC_SOLID = 0.8  # this share of the solid has solid at its mirror image: a symmetric body
 PAIR_DISTANCE = 0.08  # × size: joints are twins when their mirror images and their parents' are within this
+LOPSIDED_JOINTS = 2  # a twinless branch this long (joints) is dropped when its mirror image lies in the solid...
+LOPSIDED_INSIDE = 0.8  # ...for at least this share of its joints
 
 
-def symmetrize(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, vertices: np.ndarray
-               ) -> tuple[np.ndarray, dict]:
-    """(J, 3) `positions` (parent indices `parents`, root -1) made mirror-symmetric when the mesh (`vertices`
-    (V, 3), its solid `grid`) is, and a report.
+@dataclass(frozen=True)
+class MirrorTwins:
+    """A skeleton's mirror plane and each joint's twin across it (`twin[j]` = j on the plane, -1 = none)."""
 
-    Report: {"axis": "x"|"y"|"z", "pairs": mirror twins, "on_plane": joints put on the plane}, or {"axis": None}
-    when the solid is not symmetric (a posed character, a prop held out to one side) and nothing moved.
-    Measured on the dev rigs (auto): J2J 0.0343 → 0.0335, B2B 0.0175 → 0.0167.
-    """
-    pos = np.array(positions, dtype=np.float64, copy=True)
+    plane: MirrorPlane
+    twin: np.ndarray
+
+
+def mirror_report(twins: MirrorTwins | None, dropped: int = 0) -> dict:
+    """report.json's `mirror`: {"axis", "pairs", "on_plane", "lopsided_dropped"}, or {"axis": None} when the mesh
+    is not symmetric (a posed character, a prop held out to one side) and nothing was moved."""
+    if twins is None:
+        return {"axis": None}
+    own = np.arange(len(twins.twin))
+    return {"axis": "xyz"[twins.plane.axis], "pairs": int(np.count_nonzero((twins.twin >= 0) & (twins.twin != own))) // 2,
+            "on_plane": int(np.count_nonzero(twins.twin == own)), "lopsided_dropped": dropped}
+
+
+def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, vertices: np.ndarray
+                 ) -> MirrorTwins | None:
+    """Twins of the joints `positions` (J, 3) (parent indices `parents`, root -1) when the mesh (`vertices`
+    (V, 3), its solid `grid`) is mirror-symmetric, else None."""
     plane, share = solid_mirror(grid, np.asarray(vertices, dtype=np.float64).mean(axis=0))
     if share < SYMMETRIC_SOLID:
-        return pos, {"axis": None}
+        return None
+    pos = np.asarray(positions, dtype=np.float64)
     scale = float(np.ptp(np.argwhere(grid.occupancy), axis=0).max() + 1) * grid.pitch  # the solid's size
-    mirrored = plane.reflect(pos)
     own = np.arange(len(pos))
     up = np.where(np.asarray(parents) >= 0, parents, own)  # the root stands in for its own parent
-    apart = np.linalg.norm(mirrored[:, None] - pos[None], axis=2)
+    apart = np.linalg.norm(plane.reflect(pos)[:, None] - pos[None], axis=2)
     cost = apart + apart[up][:, up]
-    _, twin = linear_sum_assignment(cost)  # rows in order: twin[j] is j's mirror twin
+    _, twin = linear_sum_assignment(cost)  # rows in order: twin[j] is j's best twin
     paired = (cost[own, twin] <= 2.0 * PAIR_DISTANCE * scale) & (twin[twin] == own)
-    pos[paired] = 0.5 * (pos[paired] + mirrored[twin[paired]])
-    on_plane = paired & (twin == own)
-    return pos, {"axis": "xyz"[plane.axis], "pairs": int(np.count_nonzero(paired & ~on_plane)) // 2,
-                 "on_plane": int(np.count_nonzero(on_plane))}
+    return MirrorTwins(plane, np.where(paired, twin, -1))
+
+
+def symmetrize(positions: np.ndarray, twins: MirrorTwins) -> np.ndarray:
+    """(J, 3) copy of `positions` with every twin averaged with its twin's mirror image (self-twins: the plane)."""
+    pos = np.array(positions, dtype=np.float64, copy=True)
+    paired = twins.twin >= 0
+    pos[paired] = 0.5 * (pos[paired] + twins.plane.reflect(pos[twins.twin[paired]]))
+    return pos
+
+
+def lopsided_branches(positions: np.ndarray, parents: np.ndarray, twins: MirrorTwins, grid: VoxelGrid) -> np.ndarray:
+    """(J,) bool: the joints of twinless branches (LOPSIDED_JOINTS or more) whose mirror image lies in the solid.
+
+    A branch is a joint whose whole subtree is twinless, hanging from a joint with a twin (or on the plane).
+    """
+    n = len(parents)
+    children: list[list[int]] = [[] for _ in range(n)]
+    for j in range(1, n):
+        children[int(parents[j])].append(j)
+    twinless = twins.twin < 0
+    for j in range(n - 1, -1, -1):  # parents come before children: children are settled first
+        twinless[j] = twinless[j] and all(twinless[c] for c in children[j])
+    drop = np.zeros(n, bool)
+    for j in range(1, n):
+        if twinless[j] and not twinless[parents[j]]:
+            branch = [j]
+            for k in branch:
+                branch += children[k]
+            mirrored_inside = grid.inside(twins.plane.reflect(np.asarray(positions)[branch])).mean()
+            if len(branch) >= LOPSIDED_JOINTS and mirrored_inside >= LOPSIDED_INSIDE:
+                drop[branch] = True
+    return drop

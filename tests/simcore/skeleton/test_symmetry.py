@@ -8,10 +8,12 @@ from scipy.spatial import cKDTree
 
 from simcore.geometry.capsule_creatures import capsule_between, quadruped, stick_humanoid
 from simcore.geometry.voxelize import solid_voxels
+from simcore.io.gltf_document import GltfDocument
+from simcore.io.gltf_rig import read_rigged_asset
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
-from simcore.skeleton.symmetry import symmetrize
+from simcore.skeleton.symmetry import lopsided_branches, mirror_report, mirror_twins, symmetrize
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
 
@@ -19,6 +21,10 @@ ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
 def _asymmetry(positions: np.ndarray, plane: MirrorPlane) -> float:
     """Largest distance from a joint's mirror image to the nearest joint."""
     return float(cKDTree(positions).query(plane.reflect(positions))[0].max())
+
+
+def _solid(mesh: trimesh.Trimesh):
+    return solid_voxels(mesh.vertices, mesh.faces, resolution=96)
 
 
 def test_the_dogs_geometric_skeleton_is_its_own_mirror_image():
@@ -31,33 +37,49 @@ def test_the_dogs_geometric_skeleton_is_its_own_mirror_image():
 def test_jittered_twins_are_averaged_and_mid_joints_put_on_the_plane():
     vertices, faces, truth = quadruped()
     noisy = truth.positions + np.random.default_rng(5).normal(0.0, 0.01, truth.positions.shape)
-    fixed, report = symmetrize(noisy, truth.parents, solid_voxels(vertices, faces, resolution=96), vertices)
-    assert report == {"axis": "z", "pairs": 4, "on_plane": 5}  # knees and feet; pelvis, chest, neck, head, tail
+    twins = mirror_twins(noisy, truth.parents, solid_voxels(vertices, faces, resolution=96), vertices)
+    assert mirror_report(twins) == {"axis": "z", "pairs": 4, "on_plane": 5, "lopsided_dropped": 0}
+    fixed = symmetrize(noisy, twins)  # pairs: knees and feet; on the plane: pelvis, chest, neck, head, tail
     assert _asymmetry(fixed, ACROSS_Z) < 1e-9
     assert np.abs(fixed[[truth.names.index(n) for n in ("pelvis", "chest", "neck", "head", "tail")], 2]).max() < 1e-12
     assert np.linalg.norm(fixed - truth.positions, axis=1).mean() < np.linalg.norm(noisy - truth.positions, axis=1).mean()
 
 
-def test_twins_are_matched_by_their_parents_too():
-    # The right knee sits low and the right foot tip close under where the left knee's mirror image falls: by
-    # position alone the left knee would pair with the right foot tip.
+def _box_creature():
+    """Joints of a creature in a box symmetric across every axis (x, the first, is taken): a root, a left leg
+    (hip, knee, foot tip) and a right leg whose knee sits low with its foot tip close under where the left
+    knee's mirror image falls."""
     positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-1.0, 0, 0], [-1.0, -0.3, 0],
                           [0.5, 0, 0], [1.0, -0.05, 0], [1.0, -0.01, 0]], dtype=np.float64)
-    parents = np.array([-1, 0, 1, 2, 0, 4, 5])
-    box = trimesh.creation.box(extents=(2.4, 1.0, 0.4))  # symmetric across every axis: x, the first, is taken
-    fixed, report = symmetrize(positions, parents, solid_voxels(box.vertices, box.faces, resolution=96), box.vertices)
-    assert report["axis"] == "x"
-    np.testing.assert_allclose(fixed[2], MirrorPlane(0, 0.0).reflect(fixed[5:6])[0])  # knee with knee
+    box = trimesh.creation.box(extents=(2.4, 1.0, 0.4))
+    return positions, np.array([-1, 0, 1, 2, 0, 4, 5]), _solid(box), box.vertices
+
+
+def test_twins_are_matched_by_their_parents_too():
+    positions, parents, grid, vertices = _box_creature()
+    twins = mirror_twins(positions, parents, grid, vertices)
+    assert twins.plane.axis == 0 and twins.twin[2] == 5  # knee with knee: by position alone, with the foot tip
+    fixed = symmetrize(positions, twins)
+    np.testing.assert_allclose(fixed[2], twins.plane.reflect(fixed[5:6])[0])
+
+
+def test_a_twinless_branch_is_dropped_when_the_body_has_its_part_on_the_other_side():
+    positions, parents, grid, vertices = _box_creature()
+    positions = np.concatenate([positions, [[0.5, 0.2, 0.0], [0.8, 0.3, 0.0]]])  # a right-side-only branch...
+    parents = np.concatenate([parents, [0, 7]])
+    twins = mirror_twins(positions, parents, grid, vertices)
+    drop = lopsided_branches(positions, parents, twins, grid)
+    assert np.flatnonzero(drop).tolist() == [7, 8]  # ...inside the box on the left too
+    one = lopsided_branches(positions[:8], parents[:8], mirror_twins(positions[:8], parents[:8], grid, vertices), grid)
+    assert not one.any()  # a single twinless joint is left: a joint spacing that differs, not a branch
 
 
 def test_a_mesh_that_is_not_symmetric_keeps_its_joints():
     vertices, faces, truth = quadruped()
     sword = capsule_between(np.array([0.4, 0.6, 0.2]), np.array([0.4, 1.6, 0.9]), 0.05)  # held out on one side
     mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), sword])
-    fixed, report = symmetrize(truth.positions + 0.01, truth.parents, solid_voxels(mesh.vertices, mesh.faces, resolution=96),
-                                mesh.vertices)
-    assert report == {"axis": None}
-    np.testing.assert_array_equal(fixed, truth.positions + 0.01)
+    assert mirror_twins(truth.positions, truth.parents, _solid(mesh), mesh.vertices) is None
+    assert mirror_report(None) == {"axis": None}
 
 
 def test_the_humanoid_fit_of_a_symmetric_biped_is_symmetric():
@@ -65,3 +87,14 @@ def test_the_humanoid_fit_of_a_symmetric_biped_is_symmetric():
     fit = fit_humanoid(vertices, faces)
     assert fit.skeleton is not None and fit.report["mirror"]["axis"] == "x"
     assert _asymmetry(fit.skeleton.positions, MirrorPlane(0, 0.0)) < 1e-9
+
+
+def test_the_robots_one_sided_head_branch_is_dropped(dev_assets):
+    """robot_expressive's head thins into a left and a right branch; spur pruning kept the right one only, a
+    two-joint branch 0.15 × size from any mirror twin. It goes, and what is left mirrors itself within 0.035."""
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / "robot_expressive.glb").read_bytes()))
+    skeleton, report = geometric_skeleton(rig.vertices, rig.faces)
+    assert report["mirror"]["axis"] == "x" and report["mirror"]["lopsided_dropped"] == 1
+    size = float(np.ptp(rig.vertices, axis=0).max())
+    plane = MirrorPlane(0, float(rig.vertices.mean(axis=0)[0]))
+    assert _asymmetry(skeleton.positions, plane) < 0.035 * size
