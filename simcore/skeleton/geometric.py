@@ -22,7 +22,7 @@ from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.mirror import mirror_plane
-from simcore.skeleton.symmetry import lopsided_branches, mirror_report, mirror_twins, symmetrize
+from simcore.skeleton.symmetry import body_mirror, lopsided_branches, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
 
@@ -310,7 +310,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     kept = [c for c in ranked if comp_volume[c] >= params.min_part * total] or ranked[:1]
 
     spacing, spur_min = params.spacing * scale, params.spur_min * scale
-    plane = mirror_plane(base.positions[base.component == kept[0]])
+    plane = body_mirror(grid, v)  # None: not symmetric (then no twins anywhere)
     for _ in range(60):  # widen spacing, then prune longer spurs, then drop small bodies until the budget holds
         forest = MedialForest(base.positions, base.radius, [list(a) for a in base.adjacency], base.component)
         slender = params.twin_slender if spur_min <= params.spur_min * scale else np.inf  # the budget comes first
@@ -342,7 +342,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     if np.count_nonzero(parents == 0) == 1:  # a chain's root is its end: thinning stopped a radius short of it
         depth = base.radius[int(np.argmin(np.linalg.norm(base.positions - pos[0], axis=1)))]
         pos[0] = _extend_end(pos[0], pos[np.flatnonzero(parents == 0)[0]], params.root_push * depth)
-    twins = mirror_twins(pos, parents, grid, v)
+    twins = None if plane is None else mirror_twins(pos, parents, grid, plane)
     if twins is not None:
         pos = symmetrize(pos, twins)
     pos = snap_inside(grid, pos)  # a tip pulled across a bend, a joint averaged with its mirror twin

@@ -81,7 +81,7 @@ def prune_spurs(adjacency: list[list[int]], positions: np.ndarray, radius: np.nd
         for end in sorted(spurs):
             if len(adjacency[end]) < 3:  # an earlier removal this pass may have lowered its degree
                 continue
-            twins = _mirror_twins(spurs[end], positions, float(radius[end]), plane)
+            twins = _twin_spurs(spurs[end], positions, float(radius[end]), plane)
             if twins is None:
                 doomed = [min(spurs[end], key=lambda spur: spur[0])[1]]
             elif all(length >= slender * float(np.median(radius[path])) for length, path in twins):
@@ -94,7 +94,7 @@ def prune_spurs(adjacency: list[list[int]], positions: np.ndarray, radius: np.nd
                 removed += path[:-1]
 
 
-def _mirror_twins(spurs: list[tuple[float, list[int]]], positions: np.ndarray, tolerance: float,
+def _twin_spurs(spurs: list[tuple[float, list[int]]], positions: np.ndarray, tolerance: float,
                   plane: MirrorPlane | None) -> list[tuple[float, list[int]]] | None:
     """The first two of one junction's `spurs` whose leaves are mirror images across `plane` (within `tolerance`)
     and not one leaf on the plane, or None."""

@@ -31,7 +31,7 @@ from simcore.skeleton.hands import fit_fingers
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
-from simcore.skeleton.symmetry import mirror_report, mirror_twins, symmetrize
+from simcore.skeleton.symmetry import body_mirror, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
 AXES: dict[str, np.ndarray] = {
@@ -434,7 +434,8 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
         added += 1
     report["extra_limbs"] = added
     pos = np.asarray(positions)
-    twins = mirror_twins(pos, np.asarray(parents), grid, v)
+    plane = body_mirror(grid, v)
+    twins = None if plane is None else mirror_twins(pos, np.asarray(parents), grid, plane)
     report["mirror"] = mirror_report(twins)
     pos = snap_inside(grid, pos if twins is None else symmetrize(pos, twins))
     skeleton = Skeleton(pos, np.asarray(parents), names, kinds).validate()

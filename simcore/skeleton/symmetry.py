@@ -44,13 +44,15 @@ def mirror_report(twins: MirrorTwins | None, dropped: int = 0) -> dict:
             "on_plane": int(np.count_nonzero(twins.twin == own)), "lopsided_dropped": dropped}
 
 
-def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, vertices: np.ndarray
-                 ) -> MirrorTwins | None:
-    """Twins of the joints `positions` (J, 3) (parent indices `parents`, root -1) when the mesh (`vertices`
-    (V, 3), its solid `grid`) is mirror-symmetric, else None."""
+def body_mirror(grid: VoxelGrid, vertices: np.ndarray) -> MirrorPlane | None:
+    """The mesh's mirror plane when it is mirror-symmetric (`grid`: its solid, `vertices` (V, 3)), else None."""
     plane, share = solid_mirror(grid, np.asarray(vertices, dtype=np.float64).mean(axis=0))
-    if share < SYMMETRIC_SOLID:
-        return None
+    return plane if share >= SYMMETRIC_SOLID else None
+
+
+def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, plane: MirrorPlane) -> MirrorTwins:
+    """Twins across `plane` (see `body_mirror`) of the joints `positions` (J, 3) (parent indices `parents`,
+    root -1) in the solid `grid`."""
     pos = np.asarray(positions, dtype=np.float64)
     scale = float(np.ptp(np.argwhere(grid.occupancy), axis=0).max() + 1) * grid.pitch  # the solid's size
     own = np.arange(len(pos))

@@ -13,7 +13,7 @@ from simcore.io.gltf_rig import read_rigged_asset
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
-from simcore.skeleton.symmetry import lopsided_branches, mirror_report, mirror_twins, symmetrize
+from simcore.skeleton.symmetry import body_mirror, lopsided_branches, mirror_report, mirror_twins, symmetrize
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
 
@@ -27,6 +27,10 @@ def _solid(mesh: trimesh.Trimesh):
     return solid_voxels(mesh.vertices, mesh.faces, resolution=96)
 
 
+def _twins(positions: np.ndarray, parents: np.ndarray, grid, vertices: np.ndarray):
+    return mirror_twins(positions, parents, grid, body_mirror(grid, vertices))
+
+
 def test_the_dogs_geometric_skeleton_is_its_own_mirror_image():
     vertices, faces, _ = quadruped()
     skeleton, report = geometric_skeleton(vertices, faces)
@@ -37,7 +41,7 @@ def test_the_dogs_geometric_skeleton_is_its_own_mirror_image():
 def test_jittered_twins_are_averaged_and_mid_joints_put_on_the_plane():
     vertices, faces, truth = quadruped()
     noisy = truth.positions + np.random.default_rng(5).normal(0.0, 0.01, truth.positions.shape)
-    twins = mirror_twins(noisy, truth.parents, solid_voxels(vertices, faces, resolution=96), vertices)
+    twins = _twins(noisy, truth.parents, solid_voxels(vertices, faces, resolution=96), vertices)
     assert mirror_report(twins) == {"axis": "z", "pairs": 4, "on_plane": 5, "lopsided_dropped": 0}
     fixed = symmetrize(noisy, twins)  # pairs: knees and feet; on the plane: pelvis, chest, neck, head, tail
     assert _asymmetry(fixed, ACROSS_Z) < 1e-9
@@ -57,7 +61,7 @@ def _box_creature():
 
 def test_twins_are_matched_by_their_parents_too():
     positions, parents, grid, vertices = _box_creature()
-    twins = mirror_twins(positions, parents, grid, vertices)
+    twins = _twins(positions, parents, grid, vertices)
     assert twins.plane.axis == 0 and twins.twin[2] == 5  # knee with knee: by position alone, with the foot tip
     fixed = symmetrize(positions, twins)
     np.testing.assert_allclose(fixed[2], twins.plane.reflect(fixed[5:6])[0])
@@ -67,10 +71,10 @@ def test_a_twinless_branch_is_dropped_when_the_body_has_its_part_on_the_other_si
     positions, parents, grid, vertices = _box_creature()
     positions = np.concatenate([positions, [[0.5, 0.2, 0.0], [0.8, 0.3, 0.0]]])  # a right-side-only branch...
     parents = np.concatenate([parents, [0, 7]])
-    twins = mirror_twins(positions, parents, grid, vertices)
+    twins = _twins(positions, parents, grid, vertices)
     drop = lopsided_branches(positions, parents, twins, grid)
     assert np.flatnonzero(drop).tolist() == [7, 8]  # ...inside the box on the left too
-    one = lopsided_branches(positions[:8], parents[:8], mirror_twins(positions[:8], parents[:8], grid, vertices), grid)
+    one = lopsided_branches(positions[:8], parents[:8], _twins(positions[:8], parents[:8], grid, vertices), grid)
     assert not one.any()  # a single twinless joint is left: a joint spacing that differs, not a branch
 
 
@@ -78,7 +82,7 @@ def test_a_mesh_that_is_not_symmetric_keeps_its_joints():
     vertices, faces, truth = quadruped()
     sword = capsule_between(np.array([0.4, 0.6, 0.2]), np.array([0.4, 1.6, 0.9]), 0.05)  # held out on one side
     mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), sword])
-    assert mirror_twins(truth.positions, truth.parents, _solid(mesh), mesh.vertices) is None
+    assert body_mirror(_solid(mesh), mesh.vertices) is None
     assert mirror_report(None) == {"axis": None}
 
 
