@@ -310,7 +310,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     kept = [c for c in ranked if comp_volume[c] >= params.min_part * total] or ranked[:1]
 
     spacing, spur_min = params.spacing * scale, params.spur_min * scale
-    plane = body_mirror(grid, v)  # None: not symmetric (then no twins anywhere)
+    plane = body_mirror(v)  # None: not symmetric (then no twins anywhere)
     for _ in range(60):  # widen spacing, then prune longer spurs, then drop small bodies until the budget holds
         forest = MedialForest(base.positions, base.radius, [list(a) for a in base.adjacency], base.component)
         slender = params.twin_slender if spur_min <= params.spur_min * scale else np.inf  # the budget comes first

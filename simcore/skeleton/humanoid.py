@@ -40,6 +40,9 @@ AXES: dict[str, np.ndarray] = {
 }
 UP_ORDER = ("y", "z", "-y", "-z", "x", "-x")  # glTF's +Y first: it wins ties
 CONFIDENT = 0.5
+# A reading with another up than glTF's +Y, when none was given, needs more: read tail-up, the three.js horse
+# passes as a biped at 0.54 (its hind legs as arms); the Z-up bind poses of the dev humanoids score 0.92-1.0.
+SIDEWAYS_CONFIDENT = 0.8
 RESOLUTION = 112
 SPINE_FRACTIONS = {"Spine": 0.21, "Spine1": 0.435, "Spine2": 0.67}  # of Hips → Neck, Mixamo characters
 # Elbow and wrist: fractions of the arm's medial path from LOWER_ARM_FROM chest radii out from the spine to the
@@ -400,9 +403,12 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
     left = np.cross(biped.up, forward)
     report.update(confidence=round(biped.confidence, 3), checks={k: round(x, 3) for k, x in biped.checks.items()},
                   up=_facing_label(biped.up), residual=round(residual, 4))
-    if biped.confidence < CONFIDENT and not force:
+    sideways = up_given is None and not np.array_equal(biped.up, AXES["y"])
+    if biped.confidence < (SIDEWAYS_CONFIDENT if sideways else CONFIDENT) and not force:
         report["reason"] = ("the fitted template strays from the medial axis" if biped.checks["on_medial_axis"] < 1.0
                             else "biped detection below the confidence threshold")
+        if sideways and biped.confidence >= CONFIDENT:
+            report["reason"] = f"a biped only when read {_facing_label(biped.up)} up, and not confidently"
         return HumanoidFit(None, report)
     names = list(BODY_JOINTS)
     positions = [joints[n] for n in names]
@@ -434,7 +440,7 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
         added += 1
     report["extra_limbs"] = added
     pos = np.asarray(positions)
-    plane = body_mirror(grid, v)
+    plane = body_mirror(v)
     twins = None if plane is None else mirror_twins(pos, np.asarray(parents), grid, plane)
     report["mirror"] = mirror_report(twins)
     pos = snap_inside(grid, pos if twins is None else symmetrize(pos, twins))

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from simcore.geometry.voxelize import VoxelGrid
+MAX_QUERIES = 5_000  # mirrored points looked up (every k-th): enough to judge a plane, fast on 100k vertices
 
 
 @dataclass(frozen=True)
@@ -25,22 +24,19 @@ class MirrorPlane:
         return out
 
 
+def best_mirror(points: np.ndarray) -> tuple[MirrorPlane, float]:
+    """The axis-aligned plane through the centroid of `points` (N, 3) that maps them closest onto themselves, and
+    how close: the mean distance from a mirrored point to the nearest original (0 for an exact mirror image)."""
+    pts = np.asarray(points, dtype=np.float64)
+    tree = cKDTree(pts)
+    queries = pts[:: max(1, len(pts) // MAX_QUERIES)]
+    centre = pts.mean(axis=0)
+    planes = [MirrorPlane(axis, float(centre[axis])) for axis in range(3)]
+    spreads = [float(tree.query(plane.reflect(queries))[0].mean()) for plane in planes]
+    best = int(np.argmin(spreads))
+    return planes[best], spreads[best]
+
+
 def mirror_plane(points: np.ndarray) -> MirrorPlane:
-    """The axis-aligned plane through the centroid of `points` (N, 3) that maps them closest onto themselves
-    (least mean distance from each mirrored point to the nearest original)."""
-    tree = cKDTree(points)
-    centre = points.mean(axis=0)
-    planes = [MirrorPlane(axis, float(centre[axis])) for axis in range(3)]
-    return min(planes, key=lambda plane: float(tree.query(plane.reflect(points))[0].mean()))
-
-
-def solid_mirror(grid: VoxelGrid, centre: np.ndarray) -> tuple[MirrorPlane, float]:
-    """The axis-aligned plane through `centre` (3,) (the mesh's vertex centroid: exact for a mirrored mesh, and
-    moved little by a small prop) that maps the most of `grid`'s solid onto itself, and that share (0..1) of solid
-    voxels whose mirror image lies within a voxel of the solid (voxel centres need not mirror each other)."""
-    centres = grid.centers(np.argwhere(grid.occupancy))
-    near = replace(grid, occupancy=ndimage.binary_dilation(grid.occupancy))
-    planes = [MirrorPlane(axis, float(centre[axis])) for axis in range(3)]
-    shares = [float(near.inside(plane.reflect(centres)).mean()) for plane in planes]
-    best = int(np.argmax(shares))
-    return planes[best], shares[best]
+    """The plane of `best_mirror`."""
+    return best_mirror(points)[0]

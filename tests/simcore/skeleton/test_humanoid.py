@@ -8,7 +8,8 @@ import pytest
 from simcore.geometry.capsule_creatures import quadruped, stick_humanoid
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
-from simcore.skeleton.humanoid import fit_humanoid, fit_residual
+from simcore.io.gltf_static import static_arrays
+from simcore.skeleton.humanoid import CONFIDENT, SIDEWAYS_CONFIDENT, fit_humanoid, fit_residual
 from simcore.skeleton.mixamo import BODY_JOINTS, full_name
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import JointKind
@@ -149,3 +150,14 @@ def test_a_short_torso_z_up_character_is_fitted_upright_not_upside_down(dev_asse
     assert fit.report["up"] == "+z" and fit.report["checks"]["on_medial_axis"] == 1.0, fit.report
     head, hips = joint(fit.skeleton, "Head"), joint(fit.skeleton, "Hips")
     assert head[2] > hips[2]
+
+
+def test_a_horse_read_tail_up_is_not_taken_for_a_biped(dev_assets):
+    """The three.js horse (+Y up, mid-gallop) passes as a biped at 0.54 when read -Z up (hind legs as arms):
+    readings other than glTF's +Y need SIDEWAYS_CONFIDENT, so it gets the geometric skeleton."""
+    vertices, faces = static_arrays(GltfDocument.from_bytes((dev_assets / "meshseq_horse.glb").read_bytes()))
+    fit = fit_humanoid(0.01 * vertices, faces)  # centimetres, as ingest scales them
+    assert fit.skeleton is None and CONFIDENT <= fit.report["confidence"] < SIDEWAYS_CONFIDENT
+    assert fit.report["up"] == "-z" and "read -z up" in fit.report["reason"]
+    assert predict_skeleton(0.01 * vertices, faces).method == "geometric"
+    assert fit_humanoid(0.01 * vertices, faces, up_axis="-z").skeleton is not None  # an explicit up is trusted

@@ -6,13 +6,14 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
-from simcore.geometry.capsule_creatures import capsule_between, quadruped, stick_humanoid
+from simcore.geometry.capsule_creatures import capsule_between, quadruped, soup, stick_humanoid
 from simcore.geometry.voxelize import solid_voxels
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
+from simcore.skeleton.types import Skeleton
 from simcore.skeleton.symmetry import body_mirror, lopsided_branches, mirror_report, mirror_twins, symmetrize
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
@@ -28,7 +29,7 @@ def _solid(mesh: trimesh.Trimesh):
 
 
 def _twins(positions: np.ndarray, parents: np.ndarray, grid, vertices: np.ndarray):
-    return mirror_twins(positions, parents, grid, body_mirror(grid, vertices))
+    return mirror_twins(positions, parents, grid, body_mirror(vertices))
 
 
 def test_the_dogs_geometric_skeleton_is_its_own_mirror_image():
@@ -50,13 +51,14 @@ def test_jittered_twins_are_averaged_and_mid_joints_put_on_the_plane():
 
 
 def _box_creature():
-    """Joints of a creature in a box symmetric across every axis (x, the first, is taken): a root, a left leg
+    """Joints of a creature in a box with a hump, symmetric across x: a root, a left leg
     (hip, knee, foot tip) and a right leg whose knee sits low with its foot tip close under where the left
     knee's mirror image falls."""
     positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-1.0, 0, 0], [-1.0, -0.3, 0],
                           [0.5, 0, 0], [1.0, -0.05, 0], [1.0, -0.01, 0]], dtype=np.float64)
-    box = trimesh.creation.box(extents=(2.4, 1.0, 0.4))
-    return positions, np.array([-1, 0, 1, 2, 0, 4, 5]), _solid(box), box.vertices
+    hump = trimesh.creation.box(extents=(0.4, 0.3, 0.3), transform=trimesh.transformations.translation_matrix([0, 0.6, 0.1]))
+    body = trimesh.util.concatenate([trimesh.creation.box(extents=(2.4, 1.0, 0.4)), hump])  # mirrors across x only
+    return positions, np.array([-1, 0, 1, 2, 0, 4, 5]), _solid(body), body.vertices
 
 
 def test_twins_are_matched_by_their_parents_too():
@@ -82,8 +84,24 @@ def test_a_mesh_that_is_not_symmetric_keeps_its_joints():
     vertices, faces, truth = quadruped()
     sword = capsule_between(np.array([0.4, 0.6, 0.2]), np.array([0.4, 1.6, 0.9]), 0.05)  # held out on one side
     mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), sword])
-    assert body_mirror(_solid(mesh), mesh.vertices) is None
+    assert body_mirror(mesh.vertices) is None
     assert mirror_report(None) == {"axis": None}
+
+
+def test_a_posed_dog_keeps_its_posed_leg_where_it_is():
+    """One front leg swung forward (mid-stride): the mesh is no longer its own mirror image, so no joint is
+    averaged with a twin (that would pull both front legs' joints between the legs)."""
+    _, _, truth = quadruped()
+    posed = truth.positions.copy()
+    knee, foot = truth.names.index("front_l_knee"), truth.names.index("front_l_foot")
+    posed[knee] += [0.3, 0.1, 0.0]
+    posed[foot] += [0.6, 0.15, 0.0]
+    vertices, faces = soup(Skeleton(posed, truth.parents, truth.names), {c: 0.16 if truth.names[c] == "chest" else 0.06
+                                                                        for c in range(1, truth.num_joints)})
+    assert body_mirror(vertices) is None
+    skeleton, report = geometric_skeleton(vertices, faces)
+    assert report["mirror"] == {"axis": None}
+    assert cKDTree(skeleton.positions).query(posed[knee])[0] < 0.1  # the swung knee still has its joint
 
 
 def test_the_humanoid_fit_of_a_symmetric_biped_is_symmetric():
