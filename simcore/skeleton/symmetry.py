@@ -7,7 +7,7 @@ plane, joints are paired with their mirror twins: matched globally (one-to-one, 
 pair being how far each joint's mirror image is from the other plus the same for their parents, so a knee pairs
 with the other knee, not with a foot tip pulled close to it. Each twin is averaged with its twin's mirror image
 and a joint that is its own twin goes onto the plane; a branch of two or more joints with no twins, where the
-body has the same part on the other side, is dropped (the other side's was pruned as a spur there).
+body has the same part on the other side but no bones, is dropped (the other side's was pruned as a spur there).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
 
 from simcore.geometry.voxelize import VoxelGrid
 from simcore.skeleton.mirror import MirrorPlane, best_mirror
@@ -23,7 +24,8 @@ from simcore.skeleton.mirror import MirrorPlane, best_mirror
 SYMMETRIC_MESH = 0.01  # mean distance from a mirrored vertex to the nearest vertex, × size: a symmetric mesh
 PAIR_DISTANCE = 0.08  # × size: joints are twins when their mirror images and their parents' are within this
 LOPSIDED_JOINTS = 2  # a twinless branch this long (joints) is dropped when its mirror image lies in the solid...
-LOPSIDED_INSIDE = 0.8  # ...for at least this share of its joints
+LOPSIDED_INSIDE = 0.8  # ...for at least this share of its joints...
+LOPSIDED_BARE = 0.03  # ...and no joint lies within this × size of that image (no bones there on the other side)
 
 
 @dataclass(frozen=True)
@@ -57,7 +59,7 @@ def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, pl
     """Twins across `plane` (see `body_mirror`) of the joints `positions` (J, 3) (parent indices `parents`,
     root -1) in the solid `grid`."""
     pos = np.asarray(positions, dtype=np.float64)
-    scale = float(np.ptp(np.argwhere(grid.occupancy), axis=0).max() + 1) * grid.pitch  # the solid's size
+    scale = _solid_size(grid)
     own = np.arange(len(pos))
     up = np.where(np.asarray(parents) >= 0, parents, own)  # the root stands in for its own parent
     apart = np.linalg.norm(plane.reflect(pos)[:, None] - pos[None], axis=2)
@@ -65,6 +67,11 @@ def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, pl
     _, twin = linear_sum_assignment(cost)  # rows in order: twin[j] is j's best twin
     paired = (cost[own, twin] <= 2.0 * PAIR_DISTANCE * scale) & (twin[twin] == own)
     return MirrorTwins(plane, np.where(paired, twin, -1))
+
+
+def _solid_size(grid: VoxelGrid) -> float:
+    """The longest side of `grid`'s solid, metres."""
+    return float(np.ptp(np.argwhere(grid.occupancy), axis=0).max() + 1) * grid.pitch
 
 
 def symmetrize(positions: np.ndarray, twins: MirrorTwins) -> np.ndarray:
@@ -76,7 +83,8 @@ def symmetrize(positions: np.ndarray, twins: MirrorTwins) -> np.ndarray:
 
 
 def lopsided_branches(positions: np.ndarray, parents: np.ndarray, twins: MirrorTwins, grid: VoxelGrid) -> np.ndarray:
-    """(J,) bool: the joints of twinless branches (LOPSIDED_JOINTS or more) whose mirror image lies in the solid.
+    """(J,) bool: the joints of twinless branches (LOPSIDED_JOINTS or more) whose mirror image lies in the solid,
+    away from every joint.
 
     A branch is a joint whose whole subtree is twinless, hanging from a joint with a twin (or on the plane).
     """
@@ -84,6 +92,8 @@ def lopsided_branches(positions: np.ndarray, parents: np.ndarray, twins: MirrorT
     children: list[list[int]] = [[] for _ in range(n)]
     for j in range(1, n):
         children[int(parents[j])].append(j)
+    pos = np.asarray(positions, dtype=np.float64)
+    tree, scale = cKDTree(pos), _solid_size(grid)
     twinless = twins.twin < 0
     for j in range(n - 1, -1, -1):  # parents come before children: children are settled first
         twinless[j] = twinless[j] and all(twinless[c] for c in children[j])
@@ -93,7 +103,8 @@ def lopsided_branches(positions: np.ndarray, parents: np.ndarray, twins: MirrorT
             branch = [j]
             for k in branch:
                 branch += children[k]
-            mirrored_inside = grid.inside(twins.plane.reflect(np.asarray(positions)[branch])).mean()
-            if len(branch) >= LOPSIDED_JOINTS and mirrored_inside >= LOPSIDED_INSIDE:
+            mirrored = twins.plane.reflect(pos[branch])
+            bare = tree.query(mirrored)[0].min() > LOPSIDED_BARE * scale  # no bones there on the other side
+            if len(branch) >= LOPSIDED_JOINTS and grid.inside(mirrored).mean() >= LOPSIDED_INSIDE and bare:
                 drop[branch] = True
     return drop

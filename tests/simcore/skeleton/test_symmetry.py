@@ -78,6 +78,10 @@ def test_a_twinless_branch_is_dropped_when_the_body_has_its_part_on_the_other_si
     assert np.flatnonzero(drop).tolist() == [7, 8]  # ...inside the box on the left too
     one = lopsided_branches(positions[:8], parents[:8], _twins(positions[:8], parents[:8], grid, vertices), grid)
     assert not one.any()  # a single twinless joint is left: a joint spacing that differs, not a branch
+    near = np.concatenate([positions, [[-0.8, 0.28, 0.0]]])  # a left-side joint by the branch's mirror image
+    parents = np.concatenate([parents, [0]])
+    kept = lopsided_branches(near, parents, _twins(near, parents, grid, vertices), grid)
+    assert not kept.any()  # bones on the other side, placed differently: not a one-sided branch
 
 
 def test_a_mesh_that_is_not_symmetric_keeps_its_joints():
