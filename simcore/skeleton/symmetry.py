@@ -55,18 +55,31 @@ def body_mirror(vertices: np.ndarray) -> MirrorPlane | None:
     return plane if spread <= SYMMETRIC_MESH * float(np.ptp(v, axis=0).max()) else None
 
 
-def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, plane: MirrorPlane) -> MirrorTwins:
+def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, plane: MirrorPlane,
+                 names: list[str] | None = None) -> MirrorTwins:
     """Twins across `plane` (see `body_mirror`) of the joints `positions` (J, 3) (parent indices `parents`,
-    root -1) in the solid `grid`."""
+    root -1) in the solid `grid`. With `names`, `Left…`/`Right…` pairs (a template's: LeftHandIndex1 and
+    RightHandIndex1) are matched first, as neighbouring fingers' mirror images nearly coincide; they must still
+    pass the distance test."""
     pos = np.asarray(positions, dtype=np.float64)
     scale = _solid_size(grid)
     own = np.arange(len(pos))
     up = np.where(np.asarray(parents) >= 0, parents, own)  # the root stands in for its own parent
     apart = np.linalg.norm(plane.reflect(pos)[:, None] - pos[None], axis=2)
     cost = apart + apart[up][:, up]
-    _, twin = linear_sum_assignment(cost)  # rows in order: twin[j] is j's best twin
+    choice = cost.copy()
+    for i, j in _named_pairs(names or []):
+        choice[i, j] = 0.0
+    _, twin = linear_sum_assignment(choice)  # rows in order: twin[j] is j's best twin
     paired = (cost[own, twin] <= 2.0 * PAIR_DISTANCE * scale) & (twin[twin] == own)
     return MirrorTwins(plane, np.where(paired, twin, -1))
+
+
+def _named_pairs(names: list[str]) -> list[tuple[int, int]]:
+    """(i, j) index pairs of `Left…`/`Right…` names that differ only in the side."""
+    index = {name: i for i, name in enumerate(names)}
+    return [(i, index[name.replace(side, other)]) for name, i in index.items()
+            for side, other in (("Left", "Right"), ("Right", "Left")) if side in name and name.replace(side, other) in index]
 
 
 def _solid_size(grid: VoxelGrid) -> float:
