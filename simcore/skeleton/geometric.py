@@ -108,6 +108,7 @@ def _with_limb_root(nodes: list[int], interior: list[int], adjacency: list[list[
     Measured on the dev rigs (auto): J2J 0.0348 → 0.0344 (lizard, penguin, quadruped_a and dragon better, none
     worse), B2B 0.0176 either way.
     """
+    # Keys at or past len(adjacency) are junctions made by split_hubs, never leaves.
     leaf_start, leaf_end = (n < len(adjacency) and len(adjacency[n]) == 1 for n in (nodes[0], nodes[-1]))
     if leaf_start == leaf_end or len(nodes) < 3:
         return interior
@@ -348,7 +349,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     pos = snap_inside(grid, pos)  # a tip pulled across a bend, a joint averaged with its mirror twin
     skeleton, mirror = _free_skeleton(pos, parents), mirror_report(None)
     if twins is not None:
-        drop = lopsided_branches(pos, parents, twins, grid)
+        drop = lopsided_branches(skeleton, twins, grid)
         if drop.any():
             rest = skeleton.without(drop)[0]
             skeleton = _free_skeleton(rest.positions, rest.parents)

@@ -54,14 +54,14 @@ def _remove_nodes(adjacency: list[list[int]], nodes: list[int]) -> None:
 
 
 def prune_spurs(adjacency: list[list[int]], positions: np.ndarray, radius: np.ndarray, ratio: float,
-                min_length: float, plane: MirrorPlane | None = None, slender: float = 4.0) -> list[int]:
+                min_length: float, plane: MirrorPlane | None = None, slender: float = np.inf) -> list[int]:
     """Remove leaf branches shorter than `ratio` × the junction's radius + `min_length` (in place).
 
     Spurs come from surface bumps: a real limb is longer than the thickness of what it hangs off. Each pass
     removes at most one spur per junction (the shortest), so two real short branches cannot vanish together.
     With the body's mirror `plane`, two spurs of one junction that are each other's mirror image are decided
-    together: kept when both are slender (longer than `slender` × their median radius: fins, ears, horns), else
-    removed together. One at a time, the shorter would go and its twin would stay on as the junction's
+    together: kept when both are slender (longer than `slender` × their median radius: fins, ears, horns; the
+    default keeps none), else removed together. One at a time, the shorter would go and its twin would stay on as the junction's
     continuation (a fish with one pectoral fin). Returns the ids of the removed nodes.
     """
     removed: list[int] = []
@@ -95,7 +95,7 @@ def prune_spurs(adjacency: list[list[int]], positions: np.ndarray, radius: np.nd
 
 
 def _twin_spurs(spurs: list[tuple[float, list[int]]], positions: np.ndarray, tolerance: float,
-                  plane: MirrorPlane | None) -> list[tuple[float, list[int]]] | None:
+                plane: MirrorPlane | None) -> list[tuple[float, list[int]]] | None:
     """The first two of one junction's `spurs` whose leaves are mirror images across `plane` (within `tolerance`)
     and not one leaf on the plane, or None."""
     if plane is None or len(spurs) < 2:

@@ -405,10 +405,12 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
                   up=_facing_label(biped.up), residual=round(residual, 4))
     sideways = up_given is None and not np.array_equal(biped.up, AXES["y"])
     if biped.confidence < (SIDEWAYS_CONFIDENT if sideways else CONFIDENT) and not force:
-        report["reason"] = ("the fitted template strays from the medial axis" if biped.checks["on_medial_axis"] < 1.0
-                            else "biped detection below the confidence threshold")
-        if sideways and biped.confidence >= CONFIDENT:
+        if biped.confidence >= CONFIDENT:  # only SIDEWAYS_CONFIDENT refused it
             report["reason"] = f"a biped only when read {_facing_label(biped.up)} up, and not confidently"
+        elif biped.checks["on_medial_axis"] < 1.0:
+            report["reason"] = "the fitted template strays from the medial axis"
+        else:
+            report["reason"] = "biped detection below the confidence threshold"
         return HumanoidFit(None, report)
     names = list(BODY_JOINTS)
     positions = [joints[n] for n in names]

@@ -20,6 +20,7 @@ from scipy.spatial import cKDTree
 
 from simcore.geometry.voxelize import VoxelGrid
 from simcore.skeleton.mirror import MirrorPlane, best_mirror
+from simcore.skeleton.types import Skeleton
 
 SYMMETRIC_MESH = 0.01  # mean distance from a mirrored vertex to the nearest vertex, × size: a symmetric mesh
 PAIR_DISTANCE = 0.08  # × size: joints are twins when their mirror images and their parents' are within this
@@ -95,29 +96,24 @@ def symmetrize(positions: np.ndarray, twins: MirrorTwins) -> np.ndarray:
     return pos
 
 
-def lopsided_branches(positions: np.ndarray, parents: np.ndarray, twins: MirrorTwins, grid: VoxelGrid) -> np.ndarray:
+def lopsided_branches(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid) -> np.ndarray:
     """(J,) bool: the joints of twinless branches (LOPSIDED_JOINTS or more) whose mirror image lies in the solid,
     away from every joint.
 
     A branch is a joint whose whole subtree is twinless, hanging from a joint with a twin (or on the plane).
     """
-    n = len(parents)
-    children: list[list[int]] = [[] for _ in range(n)]
-    for j in range(1, n):
-        children[int(parents[j])].append(j)
-    pos = np.asarray(positions, dtype=np.float64)
+    children, parents, pos = skeleton.children(), skeleton.parents, skeleton.positions
     tree, scale = cKDTree(pos), _solid_size(grid)
     twinless = twins.twin < 0
-    for j in range(n - 1, -1, -1):  # parents come before children: children are settled first
+    for j in range(skeleton.num_joints - 1, -1, -1):  # parents come before children: children are settled first
         twinless[j] = twinless[j] and all(twinless[c] for c in children[j])
-    drop = np.zeros(n, bool)
-    for j in range(1, n):
-        if twinless[j] and not twinless[parents[j]]:
-            branch = [j]
-            for k in branch:
-                branch += children[k]
-            mirrored = twins.plane.reflect(pos[branch])
-            bare = tree.query(mirrored)[0].min() > LOPSIDED_BARE * scale  # no bones there on the other side
-            if len(branch) >= LOPSIDED_JOINTS and grid.inside(mirrored).mean() >= LOPSIDED_INSIDE and bare:
-                drop[branch] = True
+    drop = np.zeros(skeleton.num_joints, bool)
+    for j in np.flatnonzero(twinless[1:] & ~twinless[parents[1:]]) + 1:
+        branch = [int(j)]
+        for k in branch:  # grows while it is read: the whole subtree
+            branch += children[k]
+        mirrored = twins.plane.reflect(pos[branch])
+        bare = tree.query(mirrored)[0].min() > LOPSIDED_BARE * scale  # no bones there on the other side
+        if len(branch) >= LOPSIDED_JOINTS and grid.inside(mirrored).mean() >= LOPSIDED_INSIDE and bare:
+            drop[branch] = True
     return drop

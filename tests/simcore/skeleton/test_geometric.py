@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 from simcore.errors import InvalidInput
 from simcore.geometry.capsule_creatures import capsule_between, quadruped
 from simcore.geometry.voxelize import solid_voxels
-from simcore.skeleton.geometric import geometric_skeleton
+from simcore.skeleton.geometric import GeometricParams, geometric_skeleton
 from simcore.skeleton.predict import predict_skeleton
 
 
@@ -26,8 +26,6 @@ def dog():
 
 
 def test_quadruped_skeleton_matches_the_skeleton_it_was_built_on(dog):
-    from simcore.skeleton.geometric import GeometricParams
-
     vertices, faces, truth, skeleton, _ = dog
     skeleton.validate()
     scale = np.ptp(vertices, axis=0).max()
@@ -47,8 +45,6 @@ def test_joints_lie_inside_the_solid(dog):
 
 
 def test_tips_pulled_out_of_the_solid_are_snapped_back_inside(dog):
-    from simcore.skeleton.geometric import GeometricParams
-
     vertices, faces, _, _, report = dog
     # A negative pull pushes every leaf a whole bone beyond its limb's end, out of the mesh.
     pushed, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=-1.0))
@@ -112,8 +108,6 @@ def test_flat_strip_gets_an_end_to_end_chain_along_its_length():
     skeleton, report = geometric_skeleton(vertices, faces)
     assert report["sheet"] is True
     # Rooted at the lower end; the last joint is pulled back like a limb tip (where the last part starts).
-    from simcore.skeleton.geometric import GeometricParams
-
     tip = 2.0 - GeometricParams().tip_pull
     np.testing.assert_allclose(skeleton.positions, [[0, 0, 0], [0, 1, 0], [0, tip, 0]], atol=1e-9)
     assert skeleton.parents.tolist() == [-1, 0, 1]
@@ -160,8 +154,6 @@ def test_a_tube_is_one_chain_rooted_at_an_end(axis: int, label: str):
 def test_a_stubby_tube_bends_only_where_segments_are_longer_than_it_is_thick():
     # RiggedSimple's proportions: 5 diameters long. Even 0.12-length spacing gave it 8 bones; two are what bends.
     tube = capsule_between(np.array([0.0, 0.3, 0.0]), np.array([0.0, 1.9, 0.0]), 0.2)
-    from simcore.skeleton.geometric import GeometricParams
-
     skeleton, _ = geometric_skeleton(tube.vertices, tube.faces)
     assert skeleton.num_joints == 3
     # Thinning stops about a radius inside the cap; the chain's root is pushed half a radius out, towards the end.
@@ -174,8 +166,6 @@ def test_a_stubby_tube_bends_only_where_segments_are_longer_than_it_is_thick():
 
 def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
     vertices, faces, _, pulled, _ = dog
-    from simcore.skeleton.geometric import GeometricParams
-
     raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0))
     assert raw.parents.tolist() == pulled.parents.tolist()
     leaf = np.setdiff1d(np.arange(raw.num_joints), raw.parents)
@@ -197,8 +187,6 @@ def _ring_round_a_slit(top: float, bottom: float) -> trimesh.Trimesh:
 
 
 def test_cavity_in_a_body_is_closed_so_the_skeleton_runs_through_the_body():
-    from simcore.skeleton.geometric import GeometricParams
-
     # A thick head over a thin jaw loop (a fish head round its mouth): the closed axis runs through the head.
     mesh = _ring_round_a_slit(top=0.14, bottom=0.05)
     skeleton, report = geometric_skeleton(mesh.vertices, mesh.faces)

@@ -69,11 +69,16 @@ def _finned_trunk(fin_radius: float):
 
 def _prune(fin_radius: float, plane: MirrorPlane | None) -> set[int]:
     adjacency, positions, radius = _finned_trunk(fin_radius)
-    return set(prune_spurs(adjacency, positions, radius, 2.0, 0.0, plane))
+    return set(prune_spurs(adjacency, positions, radius, 2.0, 0.0, plane, GeometricParams().twin_slender))
 
 
 def test_slender_mirror_twin_spurs_are_both_kept():
     assert _prune(0.05, MirrorPlane(0, 0.0)) == set()  # 0.35 long >= 4 × 0.05: a pair of fins
+
+
+def test_without_a_slender_bound_twin_spurs_are_removed_together():
+    adjacency, positions, radius = _finned_trunk(0.05)
+    assert set(prune_spurs(adjacency, positions, radius, 2.0, 0.0, MirrorPlane(0, 0.0))) == set(range(10, 24))
 
 
 def test_stubby_mirror_twin_spurs_are_both_removed():

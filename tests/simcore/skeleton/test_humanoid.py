@@ -88,7 +88,6 @@ def test_upper_arm_joints_sit_where_the_arms_leave_the_torso(dev_assets, asset):
         assert err < 0.035, (name, err)
 
 
-
 def test_a_tail_becomes_a_spring_chain_under_the_template():
     import trimesh
 
