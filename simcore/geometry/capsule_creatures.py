@@ -50,8 +50,10 @@ def quadruped(count: int = 12, *, trunk: float = 0.45, girth: float = 0.16) -> t
     return v, f, skeleton
 
 
-def stick_humanoid(pose: str = "t", facing: str = "+z", count: int = 12) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+def stick_humanoid(pose: str = "t", facing: str = "+z", count: int = 12, feet: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """A 1.8 m capsule biped standing on y = 0, facing +Z, in T- or A-pose, then turned to `facing` (+z, +x, -z, -x).
+    feet=False: the thighs splay out to the knees and the shins stand straight on the floor with no feet forward.
 
     Returns (vertices, faces, Mixamo bare name → the joint position it was built on, (3,)).
     """
@@ -70,6 +72,9 @@ def stick_humanoid(pose: str = "t", facing: str = "+z", count: int = 12) -> tupl
         j[f"{side}Foot"] = (0.12 * s, 0.09, 0.0)
         j[f"{side}ToeBase"] = (0.12 * s, 0.05, 0.14)
         j[f"{side}ToeEnd"] = (0.12 * s, 0.05, 0.22)
+        if not feet:
+            j[f"{side}Leg"], j[f"{side}Foot"] = (0.22 * s, 0.5, 0.0), (0.22 * s, 0.09, 0.0)
+            j[f"{side}ToeBase"] = j[f"{side}ToeEnd"] = (0.22 * s, 0.05, 0.0)
     bones = [("Hips", "Spine", 0.15), ("Spine", "Spine1", 0.15), ("Spine1", "Spine2", 0.16), ("Spine2", "Neck", 0.06),
              ("Neck", "HeadTop", 0.1)]
     for side in ("Left", "Right"):

@@ -53,6 +53,10 @@ LOWER_ARM_FROM = 2.0
 # radius is down to ARM_EXIT × the arm's own radius (the median over the middle half of the path).
 ARM_EXIT = 1.5
 HIPS_ABOVE_CROTCH = 0.01  # × height: Hips sits just above where the leg branches meet
+# An ankle found higher than this × height is the knee's bend (a leg standing straight, in a coat, has no corner
+# at the foot): the ankle goes to this height instead. Dev characters' ankles: 0.04-0.07; 0.12 and 0.15 were
+# measured on the one dev character it fires on (rignet smith, a coat: its artist's ankle is at 0.125).
+ANKLE_HIGHEST = 0.12
 FUSED_CROTCH = 0.4  # a leg split below this share of the height means the thighs are fused in the voxels
 NECK_AT, HEAD_AT = 0.17, 0.35  # of shoulder line → head top (mean of Mixamo Xbot and Soldier)
 TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (0.575 on Mixamo's Xbot and Soldier)
@@ -299,6 +303,8 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
         j[f"{side}UpLeg"] = up_leg
         lower = pts[int(np.argmin(np.abs(pts @ up - (pelvis_h - 0.05 * height)))):]
         ankle_i = _corner(lower)
+        if float(lower[ankle_i] @ up) > floor + ANKLE_HIGHEST * height:
+            ankle_i = int(np.argmax(lower @ up <= floor + ANKLE_HIGHEST * height))
         ankle = lower[ankle_i]
         j[f"{side}Foot"] = ankle
         knee_h = 0.5 * (up_leg_h + float(ankle @ up))

@@ -34,6 +34,17 @@ def test_capsule_biped_gets_the_mixamo_body_where_it_was_built(pose, facing):
         assert np.linalg.norm(joint(skeleton, name) - truth[name]) < 0.09, name
 
 
+def test_a_leg_standing_straight_gets_its_ankle_low_not_at_the_knee():
+    """Shins straight down to the floor, no feet forward (a long coat): the leg's one bend is the knee."""
+    vertices, faces, truth = stick_humanoid(feet=False)
+    fit = fit_humanoid(vertices, faces)
+    assert fit.skeleton is not None, fit.report
+    for side in ("Left", "Right"):  # facing is a guess without toes: compare each joint with either leg's
+        foot, knee = joint(fit.skeleton, f"{side}Foot"), joint(fit.skeleton, f"{side}Leg")
+        assert foot[1] < 0.13 * 1.8, foot
+        assert min(np.linalg.norm(knee - truth[f"{s}Leg"]) for s in ("Left", "Right")) < 0.1, knee
+
+
 def test_quadruped_is_not_taken_for_a_humanoid():
     vertices, faces, _ = quadruped()
     prediction = predict_skeleton(vertices, faces, method="auto")
