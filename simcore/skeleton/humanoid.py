@@ -57,6 +57,10 @@ HIPS_ABOVE_CROTCH = 0.01  # × height: Hips sits just above where the leg branch
 # at the foot): the ankle goes to this height instead. Dev characters' ankles: 0.04-0.07; 0.12 and 0.15 were
 # measured on the one dev character it fires on (rignet smith, a coat: its artist's ankle is at 0.125).
 ANKLE_HIGHEST = 0.12
+# The leg's medial line turns into the foot half a foot's thickness above the floor; the ankle bone is higher.
+# Raising the Foot joint 0.01 / 0.015 / 0.02 × height above that corner: dev humanoid fits J2J 0.0263 → 0.0261 /
+# 0.0260 / 0.0261 (6 of 7 closer to their artist's ankle, Xbot 0.0098 → 0.0104); the knee and toe keep the corner.
+ANKLE_ABOVE_CORNER = 0.015
 FUSED_CROTCH = 0.4  # a leg split below this share of the height means the thighs are fused in the voxels
 NECK_AT, HEAD_AT = 0.17, 0.35  # of shoulder line → head top (mean of Mixamo Xbot and Soldier)
 TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (0.575 on Mixamo's Xbot and Soldier)
@@ -303,7 +307,8 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
         j[f"{side}UpLeg"] = up_leg
         lower = pts[int(np.argmin(np.abs(pts @ up - (pelvis_h - 0.05 * height)))):]
         ankle_i = _corner(lower)
-        if float(lower[ankle_i] @ up) > floor + ANKLE_HIGHEST * height:
+        straight = float(lower[ankle_i] @ up) > floor + ANKLE_HIGHEST * height
+        if straight:
             ankle_i = int(np.argmax(lower @ up <= floor + ANKLE_HIGHEST * height))
         ankle = lower[ankle_i]
         j[f"{side}Foot"] = ankle
@@ -313,6 +318,8 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
         else:  # the leg's own medial line starts below the knee (fused thighs): straight thigh-shin line
             j[f"{side}Leg"] = 0.5 * (up_leg + ankle)
         j[f"{side}ToeBase"] = point_at_fraction(lower[ankle_i:], 0.6)
+        if not straight:
+            j[f"{side}Foot"] = ankle + ANKLE_ABOVE_CORNER * height * up
     missing = [n for n in BODY_JOINTS if n not in j]
     if missing:
         raise _NotBiped(f"could not place {missing}")

@@ -34,6 +34,19 @@ def test_capsule_biped_gets_the_mixamo_body_where_it_was_built(pose, facing):
         assert np.linalg.norm(joint(skeleton, name) - truth[name]) < 0.09, name
 
 
+@pytest.mark.parametrize("asset", ["cesium_man.glb", "rigged_figure.glb"])
+def test_the_ankle_sits_above_where_the_leg_turns_into_the_foot(dev_assets, asset):
+    """The artists' ankle joints (leg_joint_?_3) are 1-2 % of the size above the medial corner (0.016-0.022 off)."""
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / asset).read_bytes()))
+    scale = np.ptp(rig.vertices, axis=0).max()
+    ankles = np.stack([rig.skeleton.positions[rig.skeleton.names.index(f"leg_joint_{s}_3")] for s in "LR"])
+    prediction = predict_skeleton(rig.vertices, rig.faces, method="auto")
+    assert prediction.method == "humanoid"
+    for side in ("Left", "Right"):
+        err = np.linalg.norm(ankles - joint(prediction.skeleton, f"{side}Foot"), axis=1).min() / scale
+        assert err < 0.012, (side, err)
+
+
 def test_a_leg_standing_straight_gets_its_ankle_low_not_at_the_knee():
     """Shins straight down to the floor, no feet forward (a long coat): the leg's one bend is the knee."""
     vertices, faces, truth = stick_humanoid(feet=False)
