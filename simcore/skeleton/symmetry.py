@@ -7,7 +7,8 @@ plane, joints are paired with their mirror twins: matched globally (one-to-one, 
 pair being how far each joint's mirror image is from the other plus the same for their parents, so a knee pairs
 with the other knee, not with a foot tip pulled close to it. Each twin is averaged with its twin's mirror image
 and a joint that is its own twin goes onto the plane; a branch of two or more joints with no twins, where the
-body has the same part on the other side but no bones, is dropped (the other side's was pruned as a spur there).
+body has the same part on the other side but no bones, is dropped (the other side's was pruned as a spur there),
+while a lone twinless leaf (a foot tip found on one side only) gets its mirror image on the other side.
 """
 
 from __future__ import annotations
@@ -37,14 +38,14 @@ class MirrorTwins:
     twin: np.ndarray
 
 
-def mirror_report(twins: MirrorTwins | None, dropped: int = 0) -> dict:
-    """report.json's `mirror`: {"axis", "pairs", "on_plane", "lopsided_dropped"}, or {"axis": None} when the mesh
-    is not symmetric (a posed character, a prop held out to one side) and nothing was moved."""
+def mirror_report(twins: MirrorTwins | None, dropped: int = 0, added: int = 0) -> dict:
+    """report.json's `mirror`: {"axis", "pairs", "on_plane", "lopsided_dropped", "twins_added"}, or {"axis": None}
+    when the mesh is not symmetric (a posed character, a prop held out to one side) and nothing was moved."""
     if twins is None:
         return {"axis": None}
     own = np.arange(len(twins.twin))
     return {"axis": "xyz"[twins.plane.axis], "pairs": int(np.count_nonzero((twins.twin >= 0) & (twins.twin != own))) // 2,
-            "on_plane": int(np.count_nonzero(twins.twin == own)), "lopsided_dropped": dropped}
+            "on_plane": int(np.count_nonzero(twins.twin == own)), "lopsided_dropped": dropped, "twins_added": added}
 
 
 def body_mirror(vertices: np.ndarray) -> MirrorPlane | None:
@@ -117,3 +118,23 @@ def lopsided_branches(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid) -
         if len(branch) >= LOPSIDED_JOINTS and grid.inside(mirrored).mean() >= LOPSIDED_INSIDE and bare:
             drop[branch] = True
     return drop
+
+
+def missing_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, dropped: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Mirror images of the lone twinless leaves, to add on the other side: (positions (K, 3), parents (K,)).
+
+    A leaf qualifies when its parent has a twin other than itself (neither in `dropped` (J,) bool), its mirror
+    image lies in the solid and no joint lies within LOPSIDED_BARE × size of that image; the image hangs from the
+    parent's twin. Thinning ends a foot one voxel sooner on one side and the chain there loses its last joint.
+    """
+    pos, parents, twin = skeleton.positions, skeleton.parents, twins.twin
+    tree, scale = cKDTree(pos), _solid_size(grid)
+    has_child = np.zeros(skeleton.num_joints, bool)
+    has_child[parents[parents >= 0]] = True
+    lone = [j for j in range(1, skeleton.num_joints)
+            if twin[j] < 0 and not has_child[j] and not dropped[j] and twin[parents[j]] not in (-1, parents[j])
+            and not dropped[twin[parents[j]]]]
+    images = twins.plane.reflect(pos[lone]) if lone else np.zeros((0, 3))
+    keep = grid.inside(images) & (tree.query(images)[0] > LOPSIDED_BARE * scale) if lone else np.zeros(0, bool)
+    return images[keep], np.asarray([twin[parents[j]] for j in lone], dtype=np.int64)[keep]

@@ -14,7 +14,8 @@ from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
 from simcore.skeleton.types import Skeleton
-from simcore.skeleton.symmetry import body_mirror, lopsided_branches, mirror_report, mirror_twins, symmetrize
+from simcore.skeleton.symmetry import (body_mirror, lopsided_branches, mirror_report, mirror_twins, missing_twins,
+                                      symmetrize)
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
 
@@ -47,7 +48,7 @@ def test_jittered_twins_are_averaged_and_mid_joints_put_on_the_plane():
     vertices, faces, truth = quadruped()
     noisy = truth.positions + np.random.default_rng(5).normal(0.0, 0.01, truth.positions.shape)
     twins = _twins(noisy, truth.parents, solid_voxels(vertices, faces, resolution=96), vertices)
-    assert mirror_report(twins) == {"axis": "z", "pairs": 4, "on_plane": 5, "lopsided_dropped": 0}
+    assert mirror_report(twins) == {"axis": "z", "pairs": 4, "on_plane": 5, "lopsided_dropped": 0, "twins_added": 0}
     fixed = symmetrize(noisy, twins)  # pairs: knees and feet; on the plane: pelvis, chest, neck, head, tail
     assert _asymmetry(fixed, ACROSS_Z) < 1e-9
     assert np.abs(fixed[[truth.names.index(n) for n in ("pelvis", "chest", "neck", "head", "tail")], 2]).max() < 1e-12
@@ -86,6 +87,29 @@ def test_a_twinless_branch_is_dropped_when_the_body_has_its_part_on_the_other_si
     parents = np.concatenate([parents, [0]])
     kept = lopsided_branches(_skeleton(near, parents), _twins(near, parents, grid, vertices), grid)
     assert not kept.any()  # bones on the other side, placed differently: not a one-sided branch
+
+
+def test_a_foot_tip_found_on_one_side_only_gets_its_twin_on_the_other():
+    _, _, grid, vertices = _box_creature()
+    positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-1.0, 0, 0], [-1.0, -0.3, 0], [0.5, 0, 0], [1.0, 0, 0]], float)
+    parents = np.array([-1, 0, 1, 2, 0, 4])  # the left leg ends in a foot tip, the right one at its knee
+    skeleton = _skeleton(positions, parents)
+    twins = _twins(positions, parents, grid, vertices)
+    added, hung = missing_twins(skeleton, twins, grid, np.zeros(6, bool))
+    np.testing.assert_allclose(added, [[1.0, -0.3, 0.0]])
+    assert hung.tolist() == [5]  # under the right knee
+    assert len(missing_twins(skeleton, twins, grid, np.array([0, 0, 0, 0, 0, 1], bool))[0]) == 0  # knee dropped
+    near = _skeleton(np.vstack([positions, [[1.0, -0.25, 0.0]]]), np.append(parents, 0))  # a joint by the image
+    assert len(missing_twins(near, _twins(near.positions, near.parents, grid, vertices), grid, np.zeros(7, bool))[0]) == 0
+
+
+def test_the_foxs_hind_feet_both_get_their_tip_joint(dev_assets):
+    """Thinning left one of the fox's hind feet a voxel short, and that leg one joint short (0.039 × size off)."""
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / "fox.glb").read_bytes()))
+    skeleton, report = geometric_skeleton(rig.vertices, rig.faces)
+    assert report["mirror"]["twins_added"] == 1
+    size = float(np.ptp(rig.vertices, axis=0).max())
+    assert _asymmetry(skeleton.positions, body_mirror(rig.vertices)) < 1e-6 * size
 
 
 def test_a_dog_holding_a_sword_out_to_one_side_is_not_symmetrized():
