@@ -22,7 +22,7 @@ from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.mirror import mirror_plane
-from simcore.skeleton.symmetry import (body_mirror, lopsided_branches, mirror_report, mirror_twins, missing_twins,
+from simcore.skeleton.symmetry import (body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins,
                                       symmetrize)
 from simcore.skeleton.types import JointKind, Skeleton
 
@@ -350,13 +350,12 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     pos = snap_inside(grid, pos)  # a tip pulled across a bend, a joint averaged with its mirror twin
     skeleton, mirror = _free_skeleton(pos, parents), mirror_report(None)
     if twins is not None:
-        drop = lopsided_branches(skeleton, twins, grid)
-        added, hung = missing_twins(skeleton, twins, grid, drop)
-        if drop.any() or len(added):
-            whole = _free_skeleton(np.vstack([pos, added]), np.concatenate([parents, hung]))
-            rest = whole.without(np.concatenate([drop, np.zeros(len(added), bool)]))[0]
+        lopsided = lopsided_branches(skeleton, twins, grid)
+        whole, drop, added = complete_twins(skeleton, twins, grid, lopsided)
+        if lopsided.any() or added:
+            rest = whole.without(drop)[0]
             skeleton = _free_skeleton(rest.positions, rest.parents)
-        mirror = mirror_report(twins, int(np.count_nonzero(drop[1:] & ~drop[parents[1:]])), len(added))
+        mirror = mirror_report(twins, int(np.count_nonzero(lopsided[1:] & ~lopsided[parents[1:]])), added)
     report = {
         "resolution": params.resolution,
         "close_radius": closing,

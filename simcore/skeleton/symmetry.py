@@ -8,7 +8,8 @@ pair being how far each joint's mirror image is from the other plus the same for
 with the other knee, not with a foot tip pulled close to it. Each twin is averaged with its twin's mirror image
 and a joint that is its own twin goes onto the plane; a branch of two or more joints with no twins, where the
 body has the same part on the other side but no bones, is dropped (the other side's was pruned as a spur there),
-while a lone twinless leaf (a foot tip found on one side only) gets its mirror image on the other side.
+while a lone twinless joint (a foot tip or a turning point found on one side only) gets its mirror image on the
+other side.
 """
 
 from __future__ import annotations
@@ -120,21 +121,49 @@ def lopsided_branches(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid) -
     return drop
 
 
-def missing_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, dropped: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """Mirror images of the lone twinless leaves, to add on the other side: (positions (K, 3), parents (K,)).
+def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, dropped: np.ndarray
+                   ) -> tuple[Skeleton, np.ndarray, int]:
+    """`skeleton` with the mirror images of its lone twinless joints added on the other side: (the new tree, the
+    `dropped` (J,) bool mask carried over to it (new joints False), how many joints were added).
 
-    A leaf qualifies when its parent has a twin other than itself (neither in `dropped` (J,) bool), its mirror
-    image lies in the solid and no joint lies within LOPSIDED_BARE × size of that image; the image hangs from the
-    parent's twin. Thinning ends a foot one voxel sooner on one side and the chain there loses its last joint.
+    A twinless joint j, not dropped, whose parent has a twin p' other than itself qualifies when its mirror image
+    lies in the solid with no joint within LOPSIDED_BARE × size, and it is
+    - a leaf: the image hangs from p' (thinning ended a foot one voxel sooner on the other side);
+    - a joint with one child whose twin hangs from p': the image goes between the two (a chain one joint longer
+      on one side: a turning point found on one side only).
     """
-    pos, parents, twin = skeleton.positions, skeleton.parents, twins.twin
-    tree, scale = cKDTree(pos), _solid_size(grid)
-    has_child = np.zeros(skeleton.num_joints, bool)
-    has_child[parents[parents >= 0]] = True
-    lone = [j for j in range(1, skeleton.num_joints)
-            if twin[j] < 0 and not has_child[j] and not dropped[j] and twin[parents[j]] not in (-1, parents[j])
-            and not dropped[twin[parents[j]]]]
-    images = twins.plane.reflect(pos[lone]) if lone else np.zeros((0, 3))
-    keep = grid.inside(images) & (tree.query(images)[0] > LOPSIDED_BARE * scale) if lone else np.zeros(0, bool)
-    return images[keep], np.asarray([twin[parents[j]] for j in lone], dtype=np.int64)[keep]
+    pos, parents, twin = skeleton.positions, skeleton.parents.copy(), twins.twin
+    children, tree, scale = skeleton.children(), cKDTree(pos), _solid_size(grid)
+    key = list(np.arange(skeleton.num_joints, dtype=np.float64))  # children are visited by key: images slot in
+    added: list[np.ndarray] = []
+    new_parents: list[int] = []
+    for j in range(1, skeleton.num_joints):
+        p = parents[j]
+        if twin[j] >= 0 or dropped[j] or twin[p] in (-1, p) or dropped[twin[p]] or len(children[j]) > 1:
+            continue
+        image = twins.plane.reflect(pos[j:j + 1])
+        if not grid.inside(image)[0] or tree.query(image)[0][0] <= LOPSIDED_BARE * scale:
+            continue
+        new = skeleton.num_joints + len(added)
+        if children[j]:
+            below = twin[children[j][0]]
+            if below < 0 or parents[below] != twin[p]:
+                continue
+            parents[below], k = new, key[below] - 0.5
+        else:
+            k = float(new)
+        added.append(image[0])
+        new_parents.append(int(twin[p]))
+        key.append(k)
+    if not added:
+        return skeleton, dropped, 0
+    all_parents = np.concatenate([parents, new_parents])
+    kids: list[list[int]] = [[] for _ in all_parents]
+    for c in sorted(range(1, len(all_parents)), key=lambda c: key[c]):
+        kids[all_parents[c]].append(c)
+    order = [0]
+    for j in order:  # grows while it is read: parents before children, each joint's children in key order
+        order += kids[j]
+    whole = Skeleton(np.vstack([pos, added]), all_parents, [f"j{k}" for k in range(len(all_parents))])
+    carried = np.concatenate([dropped, np.zeros(len(added), bool)])
+    return whole.reordered(np.asarray(order)), carried[order], len(added)

@@ -14,7 +14,7 @@ from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
 from simcore.skeleton.types import Skeleton
-from simcore.skeleton.symmetry import (body_mirror, lopsided_branches, mirror_report, mirror_twins, missing_twins,
+from simcore.skeleton.symmetry import (body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins,
                                       symmetrize)
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
@@ -89,18 +89,35 @@ def test_a_twinless_branch_is_dropped_when_the_body_has_its_part_on_the_other_si
     assert not kept.any()  # bones on the other side, placed differently: not a one-sided branch
 
 
-def test_a_foot_tip_found_on_one_side_only_gets_its_twin_on_the_other():
+def test_a_joint_found_on_one_side_only_gets_its_twin_on_the_other():
     _, _, grid, vertices = _box_creature()
     positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-1.0, 0, 0], [-1.0, -0.3, 0], [0.5, 0, 0], [1.0, 0, 0]], float)
     parents = np.array([-1, 0, 1, 2, 0, 4])  # the left leg ends in a foot tip, the right one at its knee
     skeleton = _skeleton(positions, parents)
     twins = _twins(positions, parents, grid, vertices)
-    added, hung = missing_twins(skeleton, twins, grid, np.zeros(6, bool))
-    np.testing.assert_allclose(added, [[1.0, -0.3, 0.0]])
-    assert hung.tolist() == [5]  # under the right knee
-    assert len(missing_twins(skeleton, twins, grid, np.array([0, 0, 0, 0, 0, 1], bool))[0]) == 0  # knee dropped
+    whole, drop, added = complete_twins(skeleton, twins, grid, np.zeros(6, bool))
+    assert added == 1 and not drop.any() and whole.validate().num_joints == 7
+    tip = int(np.argmin(np.linalg.norm(whole.positions - [1.0, -0.3, 0.0], axis=1)))
+    np.testing.assert_allclose(whole.positions[tip], [1.0, -0.3, 0.0])
+    np.testing.assert_allclose(whole.positions[whole.parents[tip]], [1.0, 0.0, 0.0])  # under the right knee
+    assert complete_twins(skeleton, twins, grid, np.array([0, 0, 0, 0, 0, 1], bool))[2] == 0  # knee dropped
     near = _skeleton(np.vstack([positions, [[1.0, -0.25, 0.0]]]), np.append(parents, 0))  # a joint by the image
-    assert len(missing_twins(near, _twins(near.positions, near.parents, grid, vertices), grid, np.zeros(7, bool))[0]) == 0
+    assert complete_twins(near, _twins(near.positions, near.parents, grid, vertices), grid, np.zeros(7, bool))[2] == 0
+
+
+def test_a_chain_one_joint_longer_on_one_side_gets_the_joint_on_the_other():
+    _, _, grid, vertices = _box_creature()
+    positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-0.8, -0.1, 0], [-1.0, -0.3, 0], [0.5, 0, 0], [1.0, -0.3, 0]],
+                         float)
+    parents = np.array([-1, 0, 1, 2, 0, 4])  # hip, knee, foot on the left; hip, foot on the right
+    skeleton = _skeleton(positions, parents)
+    whole, _, added = complete_twins(skeleton, _twins(positions, parents, grid, vertices), grid, np.zeros(6, bool))
+    assert added == 1
+    whole.validate()
+    chain = [int(np.argmin(np.linalg.norm(whole.positions - p, axis=1))) for p in ([0.5, 0, 0], [0.8, -0.1, 0],
+                                                                                       [1.0, -0.3, 0])]
+    np.testing.assert_allclose(whole.positions[chain[1]], [0.8, -0.1, 0.0])
+    assert whole.parents[chain[1]] == chain[0] and whole.parents[chain[2]] == chain[1]  # hip → knee → foot
 
 
 def test_the_foxs_hind_feet_both_get_their_tip_joint(dev_assets):
