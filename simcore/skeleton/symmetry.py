@@ -126,8 +126,8 @@ def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, drop
     """`skeleton` with the mirror images of its lone twinless joints added on the other side: (the new tree, the
     `dropped` (J,) bool mask carried over to it (new joints False), how many joints were added).
 
-    A twinless joint j, not dropped, whose parent has a twin p' other than itself qualifies when its mirror image
-    lies in the solid with no joint within LOPSIDED_BARE × size, and it is
+    A twinless joint j, not dropped, whose parent has a twin p' (the parent itself when on the plane) qualifies when
+    its mirror image lies in the solid with no joint within LOPSIDED_BARE × size, and it is
     - a leaf: the image hangs from p' (thinning ended a foot one voxel sooner on the other side);
     - a joint with one child whose twin hangs from p': the image goes between the two (a chain one joint longer
       on one side: a turning point found on one side only).
@@ -139,7 +139,7 @@ def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, drop
     new_parents: list[int] = []
     for j in range(1, skeleton.num_joints):
         p = parents[j]
-        if twin[j] >= 0 or dropped[j] or twin[p] in (-1, p) or dropped[twin[p]] or len(children[j]) > 1:
+        if twin[j] >= 0 or dropped[j] or twin[p] < 0 or dropped[twin[p]] or len(children[j]) > 1:
             continue
         image = twins.plane.reflect(pos[j:j + 1])
         if not grid.inside(image)[0] or tree.query(image)[0][0] <= LOPSIDED_BARE * scale:
