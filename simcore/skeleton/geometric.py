@@ -21,7 +21,8 @@ from simcore.skeleton.graph_simplify import branch_joints, branches, limb_exit, 
 from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
-from simcore.skeleton.mirror import mirror_plane
+from simcore.skeleton.axes import GLTF_UP
+from simcore.skeleton.mirror import MirrorPlane, mirror_plane
 from simcore.skeleton.symmetry import (body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins,
                                       symmetrize)
 from simcore.skeleton.types import JointKind, Skeleton
@@ -53,6 +54,18 @@ class GeometricParams:
     root_push: float = 0.5  # a chain's root moves this share of its medial radius outwards, towards the end
     limb_exit: float = 1.5  # a limb gets a joint where its medial radius is down to this × its own (its hip)...
     limb_gap: float = 0.3  # ...unless a joint is within this × spacing of it already
+    leg_segments: int = 4  # a leg standing on the floor gets a joint at least every this share of its length...
+    leg_upright: float = 0.75  # ...when it runs at least this steeply along the up axis (|cos|)...
+    floor_gap: float = 0.05  # ...and its tip reaches down to within this of the mesh's lowest point
+
+
+@dataclass(frozen=True)
+class _Ground:
+    """What tells a leg: the up axis (unit), the mesh's lowest point along it, its mirror plane (None: none)."""
+
+    up: np.ndarray
+    floor: float
+    plane: MirrorPlane | None
 
 
 @dataclass
@@ -63,7 +76,7 @@ class _JointGraph:
 
 
 def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParams, scale: float, spacing: float,
-                 graph: _JointGraph, body: int) -> int:
+                 ground: _Ground, graph: _JointGraph, body: int) -> int:
     """Add one body's joints and edges to `graph`; returns how many joints it added."""
     adjacency, pos, rad = forest.adjacency, forest.positions, forest.radius
     keys, brs = branches(adjacency, nodes)
@@ -84,7 +97,8 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
         graph.positions.append(merged[r])
         graph.body.append(body)
     for b in brs:
-        interior = branch_joints(pos[b.nodes], rad[b.nodes], params.turn_ratio, params.turn_min * scale, spacing)
+        step = _leg_spacing(b.nodes, adjacency, pos, rad, ground, params, scale, spacing) if len(brs) > 1 else spacing
+        interior = branch_joints(pos[b.nodes], rad[b.nodes], params.turn_ratio, params.turn_min * scale, step)
         if len(brs) > 1:
             interior = _with_limb_root(b.nodes, interior, adjacency, pos, rad, params, spacing)
         chain = [slot[rep[b.start]]]
@@ -96,6 +110,34 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
         graph.edges += list(zip(chain[:-1], chain[1:]))
     graph.edges += [(slot[a], slot[b]) for a, b in split.links]
     return len(graph.positions) - base
+
+
+def _leg_spacing(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad: np.ndarray, ground: _Ground,
+                 params: GeometricParams, scale: float, spacing: float) -> float:
+    """Joint spacing on the branch `nodes`: `spacing`, or its length / `leg_segments` when it is a leg.
+
+    A leg is a limb (junction to tip) at least `spacing` long that runs steeply along the up axis, whose tip
+    reaches down to the floor and, on a symmetric body, lies off the mirror plane (one of a pair, not a tail or a
+    hanging body). Artists give it a hip or shoulder, a knee or elbow, an ankle or wrist and a foot: four joints
+    where an even split by `spacing` gives two or three. Measured on the dev rigs (auto), legs' four segments
+    against none: the fox 0.0438 → 0.0397, quadruped_a 0.0532 → 0.0462, lizard 0.0308 → 0.0276, others unchanged;
+    3 and 5 segments also better (geometric assets 0.0382 → 0.0376, 0.0372 against 0.0370); steepness 0.75-0.8
+    the same, 0.5-0.7 also take the fish's slanting pectoral fins (0.0384 → 0.0396), 0.85 loses one of
+    quadruped_a's legs.
+    """
+    tips = [i for i in (0, len(nodes) - 1) if nodes[i] < len(adjacency) and len(adjacency[nodes[i]]) == 1]
+    if len(tips) != 1:
+        return spacing
+    tip, start = nodes[tips[0]], nodes[len(nodes) - 1 - tips[0]]
+    chord = pos[tip] - pos[start]
+    length = float(np.linalg.norm(np.diff(pos[nodes], axis=0), axis=1).sum())
+    upright = abs(float(chord @ ground.up)) >= params.leg_upright * float(np.linalg.norm(chord))
+    on_floor = float(pos[tip] @ ground.up) - rad[tip] <= ground.floor + params.floor_gap * scale
+    plane = ground.plane
+    paired = plane is None or abs(pos[tip, plane.axis] - plane.offset) > rad[tip]
+    if upright and on_floor and paired and length >= spacing:
+        return min(spacing, length / params.leg_segments)
+    return spacing
 
 
 def _with_limb_root(nodes: list[int], interior: list[int], adjacency: list[list[int]], pos: np.ndarray,
@@ -292,11 +334,12 @@ def _medial_length(forest: MedialForest) -> float:
 
 def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64,
                        params: GeometricParams = GeometricParams(),
-                       parts: list[SurfacePart] | None = None) -> tuple[Skeleton, dict]:
+                       parts: list[SurfacePart] | None = None, up: np.ndarray = GLTF_UP) -> tuple[Skeleton, dict]:
     """Skeleton of a triangle soup by medial thinning.
 
     vertices: (V, 3) float64 metres (any frame; the result is in the same frame), faces: (F, 3) int64;
-    parts: surface_parts(vertices, faces) when the caller has them already.
+    parts: surface_parts(vertices, faces) when the caller has them already; up: the up axis (unit), which only
+    tells legs standing on the floor (glTF's +Y unless the caller knows better).
     Returns (Skeleton with JointKind.FREE joints named `root`, `joint001`…, report dict). Deterministic.
     """
     v = np.asarray(vertices, dtype=np.float64)
@@ -313,6 +356,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
 
     spacing, spur_min = params.spacing * scale, params.spur_min * scale
     plane = body_mirror(v)  # None: not symmetric (then no twins anywhere)
+    ground = _Ground(up, float((v @ up).min()), plane)
     for _ in range(60):  # widen spacing, then prune longer spurs, then drop small bodies until the budget holds
         forest = MedialForest(base.positions, base.radius, [list(a) for a in base.adjacency], base.component)
         slender = params.twin_slender if spur_min <= params.spur_min * scale else np.inf  # the budget comes first
@@ -322,7 +366,8 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         alive[removed] = False
         graph = _JointGraph([], [], [])
         for b, c in enumerate(kept):
-            _body_joints(forest, np.flatnonzero((forest.component == c) & alive), params, scale, spacing, graph, b)
+            _body_joints(forest, np.flatnonzero((forest.component == c) & alive), params, scale, spacing, ground,
+                         graph, b)
         if len(graph.positions) <= max_joints:
             break
         if spacing < 2 * scale:

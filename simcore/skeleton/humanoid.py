@@ -24,6 +24,7 @@ from scipy.spatial import cKDTree
 
 from simcore.errors import InvalidInput
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.skeleton.axes import AXES, axis
 from simcore.skeleton.extra_limbs import extra_limbs
 from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.graph_simplify import limb_exit, path_length, point_at_fraction, prune_spurs, rooted_parents
@@ -34,10 +35,6 @@ from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND
 from simcore.skeleton.symmetry import body_mirror, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
-AXES: dict[str, np.ndarray] = {
-    "x": np.array([1.0, 0, 0]), "-x": np.array([-1.0, 0, 0]), "y": np.array([0, 1.0, 0]),
-    "-y": np.array([0, -1.0, 0]), "z": np.array([0, 0, 1.0]), "-z": np.array([0, 0, -1.0]),
-}
 UP_ORDER = ("y", "z", "-y", "-z", "x", "-x")  # glTF's +Y first: it wins ties
 CONFIDENT = 0.5
 # A reading with another up than glTF's +Y, when none was given, needs more: read tail-up, the three.js horse
@@ -104,15 +101,6 @@ class _Biped:
     pelvis: int
     hands: tuple[int, int]
     attach: tuple[int, int]
-
-
-def _axis(name: str | None, option: str) -> np.ndarray | None:
-    if name is None:
-        return None
-    if name not in AXES:
-        raise InvalidInput(f"unknown axis {name!r}; use one of {', '.join(AXES)}", code="invalid_option",
-                           field=f"options.{option}")
-    return AXES[name]
 
 
 def _up_path(parent: dict[int, int], n: int, stop: int = -1) -> list[int]:
@@ -386,7 +374,7 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
     layout whose template lands off the body (odd proportions) falls back to the geometric skeleton.
     Report: detected, confidence, checks, residual, up, facing, fingers.
     """
-    up_given, forward_given = _axis(up_axis, "up_axis"), _axis(forward_axis, "forward_axis")
+    up_given, forward_given = axis(up_axis, "up_axis"), axis(forward_axis, "forward_axis")
     report: dict[str, Any] = {"detected": False}
     if max_joints < len(BODY_JOINTS):
         report["reason"] = f"max_joints {max_joints} is below the {len(BODY_JOINTS)} Mixamo body joints"

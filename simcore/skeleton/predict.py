@@ -11,6 +11,7 @@ import numpy as np
 from simcore.errors import InvalidInput
 from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.geometry.referenced import referenced_mesh
+from simcore.skeleton.axes import GLTF_UP, axis
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.props import parts_to_try_without
 from simcore.skeleton.types import Skeleton
@@ -54,7 +55,8 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
               when no biped is found, saying so in the report) or "auto" (humanoid when an upright biped is
               detected with confidence, else geometric). A failed humanoid fit is retried without separate
               parts that may hide the biped (simcore.skeleton.props); the report counts what was left out.
-    up_axis / forward_axis: "x", "-x", "y", … overrides for the humanoid fit; None = detect.
+    up_axis / forward_axis: "x", "-x", "y", … overrides for the humanoid fit; None = detect. The geometric method
+              uses up_axis (default glTF's +Y) only to tell legs standing on the floor.
     Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric".
     """
     if method not in METHODS:
@@ -91,7 +93,9 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
             report["timings_s"] = timings
             return SkeletonPrediction(fit.skeleton, "humanoid", report)
     started = time.perf_counter()
-    skeleton, geo_report = geometric_skeleton(v, f, max_joints=max_joints, parts=parts)
+    up = axis(up_axis, "up_axis")
+    skeleton, geo_report = geometric_skeleton(v, f, max_joints=max_joints, parts=parts,
+                                              up=GLTF_UP if up is None else up)
     timings["geometric"] = round(time.perf_counter() - started, 3)
     report["geometric"] = geo_report
     report["timings_s"] = timings

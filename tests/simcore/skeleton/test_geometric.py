@@ -12,6 +12,7 @@ from simcore.geometry.capsule_creatures import capsule_between, quadruped
 from simcore.geometry.voxelize import solid_voxels
 from simcore.skeleton.geometric import GeometricParams, geometric_skeleton
 from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.types import Skeleton
 
 
 def chamfer(a: np.ndarray, b: np.ndarray) -> float:
@@ -175,6 +176,30 @@ def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
     assert 0.0 < share < 1.0  # a leaf on its parent would be a zero-length bone
     expected = raw.positions[leaf] + share * (raw.positions[raw.parents[leaf]] - raw.positions[leaf])
     np.testing.assert_allclose(pulled.positions[leaf], expected, atol=1e-9)
+
+
+def _leg_chains(skeleton) -> list[int]:
+    """Joint counts of the chains ending at the leaves below the body (y < 0.3 on the capsule dog)."""
+    children = skeleton.children()
+    counts = []
+    for leaf in (j for j, kids in enumerate(children) if not kids and skeleton.positions[j, 1] < 0.3):
+        chain = [leaf]
+        while skeleton.parents[chain[-1]] > 0 and len(children[skeleton.parents[chain[-1]]]) == 1:
+            chain.append(int(skeleton.parents[chain[-1]]))
+        counts.append(len(chain))
+    return counts
+
+
+def test_legs_standing_on_the_floor_get_hip_knee_ankle_and_foot(dog):
+    vertices, faces, _, skeleton, _ = dog
+    assert _leg_chains(skeleton) == [4, 4, 4, 4]  # an even split by the spacing gave knee and foot only
+    lying = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # +Y up → +Z up
+    told, _ = geometric_skeleton(vertices @ lying.T, faces, up=np.array([0, 0, 1.0]))
+    assert _leg_chains(Skeleton(told.positions @ lying, told.parents, told.names)) == [4, 4, 4, 4]
+    option = predict_skeleton(vertices @ lying.T, faces, method="geometric", up_axis="z").skeleton
+    assert _leg_chains(Skeleton(option.positions @ lying, option.parents, option.names)) == [4, 4, 4, 4]
+    untold, _ = geometric_skeleton(vertices @ lying.T, faces)  # +Y is sideways there: no legs on that floor
+    assert _leg_chains(Skeleton(untold.positions @ lying, untold.parents, untold.names)) == [2, 2, 2, 2]
 
 
 def _ring_round_a_slit(top: float, bottom: float) -> trimesh.Trimesh:
