@@ -32,7 +32,7 @@ def test_quadruped_skeleton_matches_the_skeleton_it_was_built_on(dog):
     scale = np.ptp(vertices, axis=0).max()
     # The built skeleton's leaves are its capsules' end centres, which is where thinning stops: compare before the
     # tip pull (tested below) moves them in to where artists put the last joint.
-    raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0))
+    raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0, leg_tip_pull=0.0))
     assert chamfer(raw.positions, truth.positions) / scale < 0.045
     assert 0.5 * truth.num_joints <= skeleton.num_joints <= 2 * truth.num_joints
     leaves = [j for j, kids in enumerate(skeleton.children()) if not kids]
@@ -167,14 +167,15 @@ def test_a_stubby_tube_bends_only_where_segments_are_longer_than_it_is_thick():
 
 def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
     vertices, faces, _, pulled, _ = dog
-    raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0))
+    raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0, leg_tip_pull=0.0))
     assert raw.parents.tolist() == pulled.parents.tolist()
     leaf = np.setdiff1d(np.arange(raw.num_joints), raw.parents)
     inner = np.setdiff1d(np.arange(raw.num_joints), leaf)
     np.testing.assert_allclose(pulled.positions[inner], raw.positions[inner])
-    share = GeometricParams().tip_pull
-    assert 0.0 < share < 1.0  # a leaf on its parent would be a zero-length bone
-    expected = raw.positions[leaf] + share * (raw.positions[raw.parents[leaf]] - raw.positions[leaf])
+    params = GeometricParams()
+    share = np.where(raw.positions[leaf, 1] < 0.3, params.leg_tip_pull, params.tip_pull)  # feet, head and tail
+    assert 0.0 < share.min() < share.max() < 1.0  # a leaf on its parent would be a zero-length bone
+    expected = raw.positions[leaf] + share[:, None] * (raw.positions[raw.parents[leaf]] - raw.positions[leaf])
     np.testing.assert_allclose(pulled.positions[leaf], expected, atol=1e-9)
 
 
