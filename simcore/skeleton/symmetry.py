@@ -43,14 +43,16 @@ class MirrorTwins:
     twin: np.ndarray
 
 
-def mirror_report(twins: MirrorTwins | None, dropped: int = 0, added: int = 0) -> dict:
-    """report.json's `mirror`: {"axis", "pairs", "on_plane", "lopsided_dropped", "twins_added"}, or {"axis": None}
-    when the mesh is not symmetric (a posed character, a prop held out to one side) and nothing was moved."""
+def mirror_report(twins: MirrorTwins | None, dropped: int = 0, added: int = 0, ends: int = 0) -> dict:
+    """report.json's `mirror`: {"axis", "pairs", "on_plane", "lopsided_dropped", "twins_added",
+    "midline_ends_dropped"}, or {"axis": None} when the mesh is not symmetric (a posed character, a prop held out
+    to one side) and nothing was moved."""
     if twins is None:
         return {"axis": None}
     own = np.arange(len(twins.twin))
     return {"axis": "xyz"[twins.plane.axis], "pairs": int(np.count_nonzero((twins.twin >= 0) & (twins.twin != own))) // 2,
-            "on_plane": int(np.count_nonzero(twins.twin == own)), "lopsided_dropped": dropped, "twins_added": added}
+            "on_plane": int(np.count_nonzero(twins.twin == own)), "lopsided_dropped": dropped, "twins_added": added,
+            "midline_ends_dropped": ends}
 
 
 def body_mirror(vertices: np.ndarray) -> MirrorPlane | None:

@@ -8,7 +8,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from simcore.errors import InvalidInput
-from simcore.geometry.capsule_creatures import capsule_between, quadruped
+from simcore.geometry.capsule_creatures import capsule_between, quadruped, stick_humanoid
 from simcore.geometry.voxelize import solid_voxels
 from simcore.skeleton.geometric import GeometricParams, geometric_skeleton
 from simcore.skeleton.predict import predict_skeleton
@@ -165,18 +165,39 @@ def test_a_stubby_tube_bends_only_where_segments_are_longer_than_it_is_thick():
     assert skeleton.positions[0, 1] > 0.1  # still inside the mesh (the cap's tip is at y = 0.1)
 
 
-def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
-    vertices, faces, _, pulled, _ = dog
+def _pulled_share(vertices: np.ndarray, faces: np.ndarray, picked) -> np.ndarray:
+    """How far (share of the way to the parent) the leaves `picked(positions) -> mask` were moved in."""
     raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0, leg_tip_pull=0.0))
+    pulled, _ = geometric_skeleton(vertices, faces)
     assert raw.parents.tolist() == pulled.parents.tolist()
     leaf = np.setdiff1d(np.arange(raw.num_joints), raw.parents)
+    leaf = leaf[picked(raw.positions[leaf])]
     inner = np.setdiff1d(np.arange(raw.num_joints), leaf)
-    np.testing.assert_allclose(pulled.positions[inner], raw.positions[inner])
+    step = raw.positions[raw.parents[leaf]] - raw.positions[leaf]
+    return np.einsum("ij,ij->i", pulled.positions[leaf] - raw.positions[leaf], step) / np.einsum("ij,ij->i", step, step)
+
+
+def test_limb_tips_are_pulled_towards_their_parent_joint(dog):
     params = GeometricParams()
-    share = np.where(raw.positions[leaf, 1] < 0.3, params.leg_tip_pull, params.tip_pull)  # feet, head and tail
-    assert 0.0 < share.min() < share.max() < 1.0  # a leaf on its parent would be a zero-length bone
-    expected = raw.positions[leaf] + share[:, None] * (raw.positions[raw.parents[leaf]] - raw.positions[leaf])
-    np.testing.assert_allclose(pulled.positions[leaf], expected, atol=1e-9)
+    assert 0.0 < params.leg_tip_pull < params.tip_pull < 1.0  # a leaf on its parent would be a zero-length bone
+    feet = _pulled_share(dog[0], dog[1], lambda p: p[:, 1] < 0.3)
+    np.testing.assert_allclose(feet, params.leg_tip_pull, atol=1e-9)  # legs standing on the floor
+    vertices, faces, _ = stick_humanoid()
+    hands = _pulled_share(vertices, faces, lambda p: np.abs(p[:, 0]) > 0.5)
+    assert len(hands) == 2
+    np.testing.assert_allclose(hands, params.tip_pull, atol=1e-9)
+
+
+def test_the_ends_of_a_head_and_a_tail_get_no_joint_a_rope_keeps_its_end(dog):
+    vertices, faces, truth, skeleton, report = dog
+    assert report["mirror"]["midline_ends_dropped"] == 2
+    head, tail = truth.positions[truth.names.index("head")], truth.positions[truth.names.index("tail")]
+    for end, inner in ((head, truth.positions[truth.names.index("neck")]), (tail, truth.positions[0])):
+        nearest = skeleton.positions[np.argmin(np.linalg.norm(skeleton.positions - end, axis=1))]
+        assert np.linalg.norm(nearest - end) > 0.25 * np.linalg.norm(end - inner)  # no joint out at the tip
+    rope = capsule_between(np.array([0.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), 0.05)
+    chain, chain_report = geometric_skeleton(np.asarray(rope.vertices), np.asarray(rope.faces))
+    assert chain_report["mirror"]["midline_ends_dropped"] == 0 and chain.positions[:, 1].max() > 0.8
 
 
 def _leg_chains(skeleton) -> list[int]:

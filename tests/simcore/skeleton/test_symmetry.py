@@ -48,7 +48,8 @@ def test_jittered_twins_are_averaged_and_mid_joints_put_on_the_plane():
     vertices, faces, truth = quadruped()
     noisy = truth.positions + np.random.default_rng(5).normal(0.0, 0.01, truth.positions.shape)
     twins = _twins(noisy, truth.parents, solid_voxels(vertices, faces, resolution=96), vertices)
-    assert mirror_report(twins) == {"axis": "z", "pairs": 4, "on_plane": 5, "lopsided_dropped": 0, "twins_added": 0}
+    assert mirror_report(twins) == {"axis": "z", "pairs": 4, "on_plane": 5, "lopsided_dropped": 0, "twins_added": 0,
+                                    "midline_ends_dropped": 0}
     fixed = symmetrize(noisy, twins)  # pairs: knees and feet; on the plane: pelvis, chest, neck, head, tail
     assert _asymmetry(fixed, ACROSS_Z) < 1e-9
     assert np.abs(fixed[[truth.names.index(n) for n in ("pelvis", "chest", "neck", "head", "tail")], 2]).max() < 1e-12
