@@ -17,12 +17,12 @@ from scipy.sparse.csgraph import dijkstra
 
 from simcore.geometry.parts import SurfacePart, flat_normal, principal_frame, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.skeleton.axes import GLTF_UP
 from simcore.skeleton.graph_simplify import (branch_joints, branches, limb_exit, merge_junctions, path_length,
                                              prune_spurs)
 from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
-from simcore.skeleton.axes import GLTF_UP
 from simcore.skeleton.mirror import MirrorPlane, mirror_plane
 from simcore.skeleton.symmetry import (MirrorTwins, body_mirror, complete_twins, lopsided_branches, mirror_report,
                                       mirror_twins, symmetrize)
@@ -424,7 +424,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     if twins is not None:
         lopsided = lopsided_branches(skeleton, twins, grid)
         ends = _midline_ends(skeleton, twins)
-        whole, drop, added = complete_twins(skeleton, twins, grid, lopsided | ends)
+        whole, drop, added = complete_twins(skeleton, twins, grid, lopsided | ends, max_joints)
         if drop.any() or added:
             rest = whole.without(drop)[0]
             skeleton = _free_skeleton(rest.positions, rest.parents)

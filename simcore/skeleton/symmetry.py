@@ -127,8 +127,8 @@ def lopsided_branches(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid) -
     return drop
 
 
-def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, dropped: np.ndarray
-                   ) -> tuple[Skeleton, np.ndarray, int]:
+def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, dropped: np.ndarray,
+                   max_joints: int | None = None) -> tuple[Skeleton, np.ndarray, int]:
     """`skeleton` with the mirror images of its lone twinless joints added on the other side: (the new tree, the
     `dropped` (J,) bool mask carried over to it (new joints False), how many joints were added).
 
@@ -137,14 +137,18 @@ def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, drop
     - a leaf: the image hangs from p' (thinning ended a foot one voxel sooner on the other side);
     - a joint with one child whose twin hangs from p': the image goes between the two (a chain one joint longer
       on one side: a turning point found on one side only).
+    No image is added that would take the joints not dropped past `max_joints`.
     """
     pos, parents, twin = skeleton.positions, skeleton.parents.copy(), twins.twin
     children, tree, scale = skeleton.children(), cKDTree(pos), _solid_size(grid)
     key = list(np.arange(skeleton.num_joints, dtype=np.float64))  # children are visited by key: images slot in
     added: list[np.ndarray] = []
     new_parents: list[int] = []
+    room = np.inf if max_joints is None else max_joints - int(np.count_nonzero(~dropped))
     for j in range(1, skeleton.num_joints):
         p = parents[j]
+        if len(added) >= room:
+            break
         if twin[j] >= 0 or dropped[j] or twin[p] < 0 or dropped[twin[p]] or len(children[j]) > 1:
             continue
         image = twins.plane.reflect(pos[j:j + 1])

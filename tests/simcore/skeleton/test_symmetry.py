@@ -102,6 +102,7 @@ def test_a_joint_found_on_one_side_only_gets_its_twin_on_the_other():
     np.testing.assert_allclose(whole.positions[tip], [1.0, -0.3, 0.0])
     np.testing.assert_allclose(whole.positions[whole.parents[tip]], [1.0, 0.0, 0.0])  # under the right knee
     assert complete_twins(skeleton, twins, grid, np.array([0, 0, 0, 0, 0, 1], bool))[2] == 0  # knee dropped
+    assert complete_twins(skeleton, twins, grid, np.zeros(6, bool), max_joints=6)[2] == 0  # no room in the budget
     near = _skeleton(np.vstack([positions, [[1.0, -0.27, 0.0]]]), np.append(parents, 0))  # a joint by the image
     assert complete_twins(near, _twins(near.positions, near.parents, grid, vertices), grid, np.zeros(7, bool))[2] == 0
 
