@@ -299,15 +299,13 @@ def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarra
         if straight:
             ankle_i = int(np.argmax(lower @ up <= floor + ANKLE_HIGHEST * height))
         ankle = lower[ankle_i]
-        j[f"{side}Foot"] = ankle
         knee_h = 0.5 * (up_leg_h + float(ankle @ up))
         if float(lower[0] @ up) >= knee_h:
             j[f"{side}Leg"] = _at_height(lower[: ankle_i + 1], up, knee_h)
         else:  # the leg's own medial line starts below the knee (fused thighs): straight thigh-shin line
             j[f"{side}Leg"] = 0.5 * (up_leg + ankle)
         j[f"{side}ToeBase"] = point_at_fraction(lower[ankle_i:], 0.6)
-        if not straight:
-            j[f"{side}Foot"] = ankle + ANKLE_ABOVE_CORNER * height * up
+        j[f"{side}Foot"] = ankle if straight else ankle + ANKLE_ABOVE_CORNER * height * up
     missing = [n for n in BODY_JOINTS if n not in j]
     if missing:
         raise _NotBiped(f"could not place {missing}")
