@@ -118,6 +118,13 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
     return len(graph.positions) - base
 
 
+def _leaf_end(nodes: list[int], adjacency: list[list[int]]) -> int | None:
+    """0 or len(nodes) - 1: the end of the branch `nodes` that is a leaf, when exactly one is (a limb); else None.
+    Keys at or past len(adjacency) are junctions made by split_hubs, never leaves."""
+    leaves = [i for i in (0, len(nodes) - 1) if nodes[i] < len(adjacency) and len(adjacency[nodes[i]]) == 1]
+    return leaves[0] if len(leaves) == 1 else None
+
+
 def _leg_tip(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad: np.ndarray, ground: _Ground,
              params: GeometricParams, scale: float, spacing: float) -> int | None:
     """0 or len(nodes) - 1: which end of the branch `nodes` is the foot when the branch is a leg; else None.
@@ -130,20 +137,21 @@ def _leg_tip(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad:
     against none: the fox 0.0438 → 0.0397, quadruped_a 0.0532 → 0.0462, lizard 0.0308 → 0.0276, others unchanged;
     3 and 5 segments also better (geometric assets 0.0382 → 0.0376, 0.0372 against 0.0370); steepness 0.75-0.8
     the same, 0.5-0.7 also take the fish's slanting pectoral fins (0.0384 → 0.0396), 0.85 loses one of
-    quadruped_a's legs. The foot pulled 0.3 instead of 0.7 of the way in: fox 0.0381, quadruped_a 0.0452, lizard
-    0.0263 (geometric assets 0.0367; 0 and 0.5 give 0.0367 and 0.0368), and no 1 cm last bone on the lizard.
+    quadruped_a's legs. The foot pulled 0.3 instead of 0.7 of the way in (measured with symmetry.TWIN_BARE still
+    at 0.03): fox 0.0381, quadruped_a 0.0452, lizard 0.0263 (geometric assets 0.0370 → 0.0367; 0 and 0.5 give
+    0.0367 and 0.0368), and no 1 cm last bone on the lizard.
     """
-    tips = [i for i in (0, len(nodes) - 1) if nodes[i] < len(adjacency) and len(adjacency[nodes[i]]) == 1]
-    if len(tips) != 1:
+    end = _leaf_end(nodes, adjacency)
+    if end is None:
         return None
-    tip, start = nodes[tips[0]], nodes[len(nodes) - 1 - tips[0]]
+    tip, start = nodes[end], nodes[len(nodes) - 1 - end]
     chord = pos[tip] - pos[start]
     upright = abs(float(chord @ ground.up)) >= params.leg_upright * float(np.linalg.norm(chord))
     on_floor = float(pos[tip] @ ground.up) - rad[tip] <= ground.floor + params.floor_gap * scale
-    plane = ground.plane
-    paired = plane is None or abs(pos[tip, plane.axis] - plane.offset) > rad[tip]
+    plane = ground.plane  # off it by more than the limb is thick: one of a pair
+    paired = plane is None or abs(pos[tip, plane.axis] - plane.offset) > float(np.median(rad[nodes]))
     long_enough = path_length(pos, nodes) >= spacing
-    return tips[0] if upright and on_floor and paired and long_enough else None
+    return end if upright and on_floor and paired and long_enough else None
 
 
 def _with_limb_root(nodes: list[int], interior: list[int], adjacency: list[list[int]], pos: np.ndarray,
@@ -157,11 +165,11 @@ def _with_limb_root(nodes: list[int], interior: list[int], adjacency: list[list[
     Measured on the dev rigs (auto): J2J 0.0348 → 0.0344 (lizard, penguin, quadruped_a and dragon better, none
     worse), B2B 0.0176 either way.
     """
-    # Keys at or past len(adjacency) are junctions made by split_hubs, never leaves.
-    leaf_start, leaf_end = (n < len(adjacency) and len(adjacency[n]) == 1 for n in (nodes[0], nodes[-1]))
-    if leaf_start == leaf_end or len(nodes) < 3:
+    end = _leaf_end(nodes, adjacency)
+    if end is None or len(nodes) < 3:
         return interior
     last = len(nodes) - 1
+    leaf_end = end == last
     flip = (lambda i: i) if leaf_end else (lambda i: last - i)  # branch index <-> index from the junction
     path = np.asarray(nodes if leaf_end else nodes[::-1])  # junction → tip
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pos[path], axis=0), axis=1))])
@@ -257,8 +265,8 @@ def _pull_tips(pos: np.ndarray, parents: np.ndarray, share: float | np.ndarray) 
     has_child = np.zeros(len(pos), bool)
     has_child[parents[parents >= 0]] = True
     leaves = np.flatnonzero(~has_child & (parents >= 0))
-    out[leaves] += np.broadcast_to(np.asarray(share, dtype=np.float64), (len(pos),))[leaves, None] * (
-        pos[parents[leaves]] - pos[leaves])
+    shares = np.broadcast_to(share, len(pos))[leaves, None]
+    out[leaves] += shares * (pos[parents[leaves]] - pos[leaves])
     return out
 
 
@@ -269,8 +277,8 @@ def _midline_ends(skeleton: Skeleton, twins: MirrorTwins) -> np.ndarray:
     Artists end a head or tail chain at its last pivot; the joint at its tip (Mixamo's HeadTop_End) carries no
     weight, so it is not part of their rig. Measured on the dev rigs (auto), every non-toy geometric asset closer
     or the same: fox 0.0372 → 0.0365, fish 0.0384 → 0.0379, dragon 0.0534 → 0.0503, quadruped_a 0.0452 → 0.0406,
-    bat 0.0323 → 0.0311, bird, penguin, lizard 0.0261 → 0.0237; robot the same. Pulling them further in instead
-    (0.8 / 0.9 of the way) gave less (geometric assets 0.0356 / 0.0351 against 0.0343) and a stub last bone.
+    bat 0.0323 → 0.0311, bird, penguin, lizard 0.0261 → 0.0237; robot the same. Over those nine, 0.0361 → 0.0346;
+    pulling the ends further in instead (0.8 / 0.9 of the way) gave 0.0358 / 0.0356 and a stub last bone.
     """
     parents, own = skeleton.parents, np.arange(skeleton.num_joints)
     degree = np.bincount(parents[parents >= 0], minlength=skeleton.num_joints) + (parents >= 0)

@@ -37,10 +37,12 @@ TWIN_BARE = 0.02
 
 @dataclass(frozen=True)
 class MirrorTwins:
-    """A skeleton's mirror plane and each joint's twin across it (`twin[j]` = j on the plane, -1 = none)."""
+    """A skeleton's mirror plane, each joint's twin across it (`twin[j]` = j on the plane, -1 = none) and the size
+    (longest side of the solid, metres) the distance tests are relative to."""
 
     plane: MirrorPlane
     twin: np.ndarray
+    size: float
 
 
 def mirror_report(twins: MirrorTwins | None, dropped: int = 0, added: int = 0, ends: int = 0) -> dict:
@@ -81,7 +83,7 @@ def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, pl
         choice[i, j] = 0.0
     _, twin = linear_sum_assignment(choice)  # rows in order: twin[j] is j's best twin
     paired = (cost[own, twin] <= 2.0 * PAIR_DISTANCE * scale) & (twin[twin] == own)
-    return MirrorTwins(plane, np.where(paired, twin, -1))
+    return MirrorTwins(plane, np.where(paired, twin, -1), scale)
 
 
 def _named_pairs(names: list[str]) -> list[tuple[int, int]]:
@@ -111,7 +113,7 @@ def lopsided_branches(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid) -
     A branch is a joint whose whole subtree is twinless, hanging from a joint with a twin (or on the plane).
     """
     children, parents, pos = skeleton.children(), skeleton.parents, skeleton.positions
-    tree, scale = cKDTree(pos), _solid_size(grid)
+    tree, scale = cKDTree(pos), twins.size
     twinless = twins.twin < 0
     for j in range(skeleton.num_joints - 1, -1, -1):  # parents come before children: children are settled first
         twinless[j] = twinless[j] and all(twinless[c] for c in children[j])
@@ -140,7 +142,7 @@ def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, drop
     No image is added that would take the joints not dropped past `max_joints`.
     """
     pos, parents, twin = skeleton.positions, skeleton.parents.copy(), twins.twin
-    children, tree, scale = skeleton.children(), cKDTree(pos), _solid_size(grid)
+    children, tree, scale = skeleton.children(), cKDTree(pos), twins.size
     key = list(np.arange(skeleton.num_joints, dtype=np.float64))  # children are visited by key: images slot in
     added: list[np.ndarray] = []
     new_parents: list[int] = []
