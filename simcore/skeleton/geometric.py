@@ -29,6 +29,7 @@ from simcore.skeleton.symmetry import (MirrorTwins, body_mirror, complete_twins,
 from simcore.skeleton.types import JointKind, Skeleton
 
 
+STUB_VOXELS = 0.5  # a bone shorter than this many voxels is no bone: its child joint goes
 SHEET_PART_AREA = 0.01  # parts with less of the area (a button on a flag) do not decide whether it is a sheet
 
 
@@ -288,6 +289,15 @@ def _midline_ends(skeleton: Skeleton, twins: MirrorTwins) -> np.ndarray:
     return ends
 
 
+def _stub_joints(pos: np.ndarray, parents: np.ndarray, shortest: float) -> np.ndarray:
+    """(J,) bool: the joints closer than `shortest` to their parent (a zero-length bone has no direction to
+    rotate about). Averaging mirror twins makes them: the bird's foot had a twinless joint on one side and its
+    child, paired with the other side's joint, landed on it."""
+    stub = np.zeros(len(pos), bool)
+    stub[1:] = np.linalg.norm(pos[1:] - pos[parents[1:]], axis=1) < shortest
+    return stub
+
+
 def _free_skeleton(positions: np.ndarray, parents: np.ndarray) -> Skeleton:
     """A validated Skeleton of FREE joints named `root`, `joint001`, … in order."""
     names = ["root"] + [f"joint{k:03d}" for k in range(1, len(positions))]
@@ -429,15 +439,17 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         pos = symmetrize(pos, twins)
     pos = snap_inside(grid, pos)  # a tip pulled across a bend, a joint averaged with its mirror twin
     skeleton, mirror = _free_skeleton(pos, parents), mirror_report(None)
+    stubs = _stub_joints(pos, parents, STUB_VOXELS * grid.pitch)
+    whole, drop = skeleton, stubs
     if twins is not None:
         lopsided = lopsided_branches(skeleton, twins, grid)
         ends = _midline_ends(skeleton, twins)
-        whole, drop, added = complete_twins(skeleton, twins, grid, lopsided | ends, max_joints)
-        if drop.any() or added:
-            rest = whole.without(drop)[0]
-            skeleton = _free_skeleton(rest.positions, rest.parents)
+        whole, drop, added = complete_twins(skeleton, twins, grid, lopsided | ends | stubs, max_joints)
         mirror = mirror_report(twins, int(np.count_nonzero(lopsided[1:] & ~lopsided[parents[1:]])), added,
                                int(np.count_nonzero(ends)))
+    if drop.any() or whole is not skeleton:
+        rest = whole.without(drop)[0]
+        skeleton = _free_skeleton(rest.positions, rest.parents)
     report = {
         "resolution": params.resolution,
         "close_radius": closing,
@@ -450,6 +462,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         "bodies_joined": joined,
         "joints": skeleton.num_joints,
         "spacing": spacing,
+        "stub_joints_dropped": int(np.count_nonzero(stubs)),
         "mirror": mirror,
     }
     return skeleton, report

@@ -131,6 +131,16 @@ def test_the_foxs_hind_feet_both_get_their_tip_joint(dev_assets):
     assert _asymmetry(skeleton.positions, body_mirror(rig.vertices)) < 1e-6 * size
 
 
+def test_averaging_twins_leaves_no_zero_length_bone(dev_assets):
+    """On the bird's right foot a twinless joint and its child (paired with a left-foot joint) were averaged onto
+    the same point: a bone of length 0, with no direction to rotate about. The child goes; its own children stay."""
+    rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / "rignet_17872_bird.glb").read_bytes()))
+    skeleton, report = geometric_skeleton(rig.vertices, rig.faces)
+    pitch = report["voxel_pitch"]
+    bones = np.linalg.norm(skeleton.positions[1:] - skeleton.positions[skeleton.parents[1:]], axis=1)
+    assert bones.min() > pitch
+
+
 def test_a_dog_holding_a_sword_out_to_one_side_is_not_symmetrized():
     vertices, faces, _ = quadruped()
     sword = capsule_between(np.array([0.4, 0.6, 0.2]), np.array([0.4, 1.6, 0.9]), 0.05)
