@@ -215,6 +215,21 @@ def test_a_head_hanging_straight_from_a_junction_keeps_its_only_joint():
     assert _midline_ends(skeleton, twins).tolist() == [False, False, False, False, True, False]
 
 
+def test_a_round_head_gets_one_joint_at_its_neck_and_none_inside(dog):
+    """The capsule dog with a ball of a head, 2.4 × as thick as its neck: the neck keeps its joints, the head pivots
+    where the neck meets it, and no joint lies inside the skull (without the rule one sat 0.16 from its centre)."""
+    vertices, faces, truth, _, _ = dog
+    centre, radius = np.array([1.1, 0.95, 0.0]), 0.24
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=radius)
+    ball.apply_translation(centre)
+    skeleton, _ = geometric_skeleton(np.vstack([vertices, ball.vertices]), np.vstack([faces, ball.faces + len(vertices)]))
+    to_centre = np.linalg.norm(skeleton.positions - centre, axis=1)
+    assert to_centre.min() > radius  # nothing inside the skull
+    neck = truth.positions[truth.names.index("neck")]
+    assert np.linalg.norm(skeleton.positions - neck, axis=1).min() < 0.1  # the neck keeps its joint
+    assert np.sort(to_centre)[0] < radius + 0.15  # the head's pivot is where the neck meets it
+
+
 def test_the_bats_head_keeps_a_joint(dev_assets):
     """The bat's head thins to one branch straight from the body's junction. Its artist's head joint (the highest)
     is 0.069 from our nearest joint (unit-cube units), 0.112 when the head's joint was dropped as a midline end."""
