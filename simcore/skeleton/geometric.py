@@ -313,10 +313,10 @@ def _pull_tips(pos: np.ndarray, parents: np.ndarray, share: float | np.ndarray) 
 
 def _midline_ends(skeleton: Skeleton, twins: MirrorTwins) -> np.ndarray:
     """(J,) bool: the leaves on the mirror plane (the ends of a head, a tail, a snout) of a skeleton that has a
-    junction, at the end of a chain; none for a lone chain (a rope keeps its end) or when fewer than two joints
-    would remain. A leaf hanging straight from a junction keeps its joint: it is the part's only bone (the bat's
-    head: without it the head could not turn), 0.0311 → 0.0291 on the bat; the fish's upper tail lobe, kept the
-    same way, 0.0379 → 0.0388.
+    junction; none for a lone chain (a rope keeps its end) or when fewer than two joints would remain. A leaf
+    hanging straight from the body (a joint with limbs off the plane) keeps its joint: it is the part's only bone
+    (the bat's head: without it the head could not turn), 0.0311 → 0.0291 on the bat. A fork on the plane (the
+    fish's two tail lobes) is one part's end: its leaves go (kept, the fish measured 0.0388 against 0.0379).
 
     Artists end a head or tail chain at its last pivot; the joint at its tip (Mixamo's HeadTop_End) carries no
     weight, so it is not part of their rig. Measured on the dev rigs (auto), every non-toy geometric asset closer
@@ -326,8 +326,12 @@ def _midline_ends(skeleton: Skeleton, twins: MirrorTwins) -> np.ndarray:
     """
     parents, own = skeleton.parents, np.arange(skeleton.num_joints)
     degree = np.bincount(parents[parents >= 0], minlength=skeleton.num_joints) + (parents >= 0)
-    chain_end = (parents >= 0) & (degree[np.maximum(parents, 0)] == 2) & (parents[np.maximum(parents, 0)] >= 0)
-    ends = (degree == 1) & chain_end & (twins.twin == own)
+    on_plane = twins.twin == own
+    hub = np.zeros(skeleton.num_joints, bool)  # a joint with a child off the mirror plane: the body, not a fork
+    hub[parents[(parents >= 0) & ~on_plane]] = True
+    up = np.maximum(parents, 0)
+    chain_end = (parents >= 0) & (((degree[up] == 2) & (parents[up] >= 0)) | ~hub[up])
+    ends = (degree == 1) & chain_end & on_plane
     if not (degree >= 3).any() or np.count_nonzero(~ends) < 2:
         return np.zeros(skeleton.num_joints, bool)
     return ends

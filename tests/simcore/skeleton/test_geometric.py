@@ -205,14 +205,15 @@ def test_the_ends_of_a_head_and_a_tail_get_no_joint_a_rope_keeps_its_end(dog):
     assert chain_report["mirror"]["midline_ends_dropped"] == 0 and chain.positions[:, 1].max() > 0.8
 
 
-def test_a_head_hanging_straight_from_a_junction_keeps_its_only_joint():
-    """Root junction with two wings, a tail chain (pivot, tip) and a head that is a single leaf: the tail's tip
-    goes, the head's joint stays (it is the head's only bone)."""
-    positions = np.array([[0, 0, 0], [-1, 0, 0], [1, 0, 0], [0, -0.5, 0], [0, -1, 0], [0, 0.5, 0]], float)
-    parents = np.array([-1, 0, 0, 0, 3, 0])
-    skeleton = Skeleton(positions, parents, [f"j{k}" for k in range(6)])
-    twins = MirrorTwins(MirrorPlane(0, 0.0), np.array([0, 2, 1, 3, 4, 5]), 2.0)
-    assert _midline_ends(skeleton, twins).tolist() == [False, False, False, False, True, False]
+def test_a_head_hanging_straight_from_the_body_keeps_its_only_joint():
+    """Root junction with two wings, a head that is a single leaf, and a tail whose pivot forks into two lobes on
+    the mid-plane: the head's joint stays (it is the head's only bone), both lobe tips go (one part's end)."""
+    positions = np.array([[0, 0, 0], [-1, 0, 0], [1, 0, 0], [0, -0.5, 0], [0, -1, 0.1], [0, 0.5, 0],
+                          [0, -1, -0.1]], float)
+    parents = np.array([-1, 0, 0, 0, 3, 0, 3])
+    skeleton = Skeleton(positions, parents, [f"j{k}" for k in range(7)])
+    twins = MirrorTwins(MirrorPlane(0, 0.0), np.array([0, 2, 1, 3, 4, 5, 6]), 2.0)
+    assert _midline_ends(skeleton, twins).tolist() == [False, False, False, False, True, False, True]
 
 
 def test_a_round_head_gets_one_joint_at_its_neck_and_none_inside(dog):
