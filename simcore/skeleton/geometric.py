@@ -60,8 +60,8 @@ class GeometricParams:
     leg_upright: float = 0.75  # ...when it runs at least this steeply along the up axis (|cos|)...
     floor_gap: float = 0.05  # ...and its tip reaches down to within this of the mesh's lowest point
     leg_tip_pull: float = 0.3  # a leg's foot joint moves only this share towards its parent (0 / 0.3 / 0.5 alike)
-    end_widen: float = 1.3  # a limb widening again to this × its thinnest ends in a rigid part (a head)...
-    neck_tol: float = 1.1  # ...pivoting where the narrowing is within this × its thinnest, nearest the part
+    head_widen: float = 1.3  # a mid-plane limb widening again to this × its thinnest is a head on a neck...
+    neck_tol: float = 1.1  # ...pivoting where the neck is within this × its thinnest, nearest the head
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
         interior = branch_joints(pos[b.nodes], rad[b.nodes], params.turn_ratio, params.turn_min * scale, step)
         if len(brs) > 1:
             interior = _with_limb_root(b.nodes, interior, adjacency, pos, rad, params, spacing)
-            interior = _rigid_end(b.nodes, interior, adjacency, pos, rad, params, spacing)
+            interior = _head_at_neck(b.nodes, interior, adjacency, pos, rad, ground, params, spacing)
         chain = [slot[rep[b.start]]]
         for i in interior:
             chain.append(len(graph.positions))
@@ -161,23 +161,21 @@ def _leg_tip(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad:
 RADIUS_SMOOTH = 5  # medial voxels averaged when a limb's thickness profile is read
 
 
-def _rigid_end(nodes: list[int], interior: list[int], adjacency: list[list[int]], pos: np.ndarray, rad: np.ndarray,
-               params: GeometricParams, spacing: float) -> list[int]:
-    """`interior` (indices into the branch `nodes`) with the joints of a limb's rigid end part replaced by one at
-    the narrowing it hangs from.
+def _head_at_neck(nodes: list[int], interior: list[int], adjacency: list[list[int]], pos: np.ndarray,
+                  rad: np.ndarray, ground: _Ground, params: GeometricParams, spacing: float) -> list[int]:
+    """`interior` (indices into the branch `nodes`) with a head's joints replaced by one at its neck.
 
-    A limb (junction to tip) that widens again beyond its thinnest point, to at least `end_widen` × that
-    thickness, ends in a part on a narrowing: a skull on a neck, a mitten hand on a wrist. Such a part does not
-    bend, so joints inside it only let it buckle: it gets one joint, its pivot, where the narrowing is thinnest
-    next to it (the last point within `neck_tol` of the thinnest, as a long neck is thin all along), and joints
-    closer than `limb_gap` × spacing to that point go. On the mid-plane, the tip then ends the chain as a midline
-    end (`_midline_ends`). The first and last tenth of the limb are not read: the junction's ball and the tip's cap.
-    Measured on the dev rigs (auto), it fires on two heads: quadruped_a 0.0406 → 0.0355 (B2B 0.0271 → 0.0206) and
-    robot_expressive's (one-sided) 0.0318 → 0.0310; `end_widen` 1.2-1.6 the same, `neck_tol` 1.0 / 1.2 give
-    quadruped_a 0.0356 / 0.0352. Only on mid-plane tips: the robot's stays at 0.0318.
+    A head is the end of a limb whose tip lies on the mirror plane and which widens again, beyond its thinnest
+    point, to at least `head_widen` × that thickness (a skull beyond a neck). A skull does not bend, so joints
+    inside it only let it buckle: it gets one joint, its pivot, where the neck is thinnest next to it (the last
+    point within `neck_tol` of the thinnest, as a long neck is thin all along), and joints of the neck closer than
+    `limb_gap` × spacing to that point go. Its tip then ends the chain as a midline end (`_midline_ends`).
+    The first and last tenth of the limb are not read: the junction's ball and the tip's cap.
+    Measured on the dev rigs (auto): quadruped_a 0.0406 → 0.0355 (B2B 0.0271 → 0.0206), the only one it fires on;
+    `head_widen` 1.2-1.6 the same, `neck_tol` 1.0 / 1.2 give 0.0356 / 0.0352.
     """
-    end = _leaf_end(nodes, adjacency)
-    if end is None:
+    end, plane = _leaf_end(nodes, adjacency), ground.plane
+    if end is None or plane is None or abs(pos[nodes[end], plane.axis] - plane.offset) > rad[nodes[end]]:
         return interior
     last = len(nodes) - 1
     flip = (lambda i: i) if end == last else (lambda i: last - i)  # branch index <-> index from the junction
@@ -187,7 +185,7 @@ def _rigid_end(nodes: list[int], interior: list[int], adjacency: list[list[int]]
     if hi - lo < 3:
         return interior
     widest = lo + int(np.argmax(r[lo:hi]))
-    if widest == lo or r[widest] < params.end_widen * float(r[lo:widest].min()):
+    if widest == lo or r[widest] < params.head_widen * float(r[lo:widest].min()):
         return interior
     neck = lo + int(np.flatnonzero(r[lo:widest] <= params.neck_tol * float(r[lo:widest].min()))[-1])
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pos[path], axis=0), axis=1))])

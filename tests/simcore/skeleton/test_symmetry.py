@@ -172,14 +172,12 @@ def test_the_humanoid_fit_of_a_symmetric_biped_is_symmetric():
     assert _asymmetry(fit.skeleton.positions, MirrorPlane(0, 0.0)) < 1e-9
 
 
-def test_the_robots_one_sided_head_branch_gets_its_twin(dev_assets):
+def test_the_robots_one_sided_head_branch_is_dropped(dev_assets):
     """robot_expressive's head thins into a left and a right branch; spur pruning kept the right one only, a
-    two-joint branch 0.15 × size from any mirror twin (once dropped as lopsided). Its head is a rigid end part now,
-    one joint where it narrows (geometric._rigid_end), and that joint gets its mirror twin: the skeleton mirrors
-    itself within 0.035."""
+    two-joint branch 0.15 × size from any mirror twin. It goes, and what is left mirrors itself within 0.035."""
     rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / "robot_expressive.glb").read_bytes()))
     skeleton, report = geometric_skeleton(rig.vertices, rig.faces)
-    assert report["mirror"]["axis"] == "x" and report["mirror"]["twins_added"] == 1
+    assert report["mirror"]["axis"] == "x" and report["mirror"]["lopsided_dropped"] == 1
     size = float(np.ptp(rig.vertices, axis=0).max())
     plane = MirrorPlane(0, float(rig.vertices.mean(axis=0)[0]))
     assert _asymmetry(skeleton.positions, plane) < 0.035 * size
