@@ -360,10 +360,13 @@ def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_join
     """(J, 3) joints of a chain along the principal axis when the mesh is a flat sheet, else None.
 
     parts: the mesh's connected parts (surface_parts). A sheet (thickness < `ratio` × length) has no solid to
-    thin; artists rig a strip, flag or card as one chain from end to end, one joint per max(`spacing`, sheet
-    width) of length. Each part holding SHEET_PART_AREA of the area must be flat itself (two solids far apart
-    are flat as a whole, and a chain through the empty space between them is no skeleton); the chain follows
-    those parts, smaller ones (a button) take their weights from it.
+    thin; artists rig a strip, flag or card as one chain of even segments, max(`spacing`, sheet width) long, with
+    a joint where each segment starts (the segment's pivot) and none on the far edge, which would bend nothing
+    (the glTF specification's SimpleSkin strip: two joints, at its base and its middle; the tip pulled 0.7 back
+    from the far edge instead left a last bone 0.15 × the length long). Each part holding SHEET_PART_AREA of the
+    area must be flat itself (two solids far apart are flat as a whole, and a chain through the empty space
+    between them is no skeleton); the chain follows those parts, smaller ones (a button) take their weights from
+    it.
     """
     total = sum(p.area for p in parts)
     deciding = [p.points for p in parts if p.area >= SHEET_PART_AREA * total] or [parts[0].points]
@@ -374,11 +377,11 @@ def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_join
     extent = np.ptp(local, axis=0)
     if extent[0] <= 0 or extent[2] >= ratio * extent[0]:
         return None
-    segments = int(np.clip(np.floor(extent[0] / max(spacing, extent[1]) + 0.5), 2, max(max_joints - 1, 1)))
+    segments = int(np.clip(np.floor(extent[0] / max(spacing, extent[1]) + 0.5), 2, max(max_joints, 2)))
     mid = 0.5 * (local.min(axis=0) + local.max(axis=0))
     t = local[:, 0].min() + extent[0] * np.arange(segments + 1) / segments
     chain = centre + (mid[None, :] * [0, 1, 1] + t[:, None] * [1, 0, 0]) @ axes
-    return chain if chain[0, 1] <= chain[-1, 1] else chain[::-1]  # root at the lower end (+Y up)
+    return (chain if chain[0, 1] <= chain[-1, 1] else chain[::-1])[:-1]  # root at the lower end (+Y up)
 
 
 def rank_bodies(grid: VoxelGrid, forest: MedialForest) -> tuple[list[int], dict[int, int], np.ndarray]:
@@ -437,7 +440,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     chain = sheet_chain(parts if parts is not None else surface_parts(v, faces), params.sheet_ratio, params.spacing * scale, max_joints)
     if chain is not None:
         parents = np.arange(-1, len(chain) - 1, dtype=np.int64)
-        skeleton = _free_skeleton(_pull_tips(chain, parents, params.tip_pull), parents)
+        skeleton = _free_skeleton(chain, parents)
         return skeleton, {"sheet": True, "joints": skeleton.num_joints, "bodies": 1}
     grid, base, closing = _closed_solid(v, faces, params)
     ranked, comp_volume, body_labels = rank_bodies(grid, base)

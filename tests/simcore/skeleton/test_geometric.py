@@ -113,10 +113,10 @@ def test_flat_strip_gets_an_end_to_end_chain_along_its_length():
     faces = np.array([[2 * i, 2 * i + 1, 2 * i + 3] for i in range(4)] + [[2 * i, 2 * i + 3, 2 * i + 2] for i in range(4)])
     skeleton, report = geometric_skeleton(vertices, faces)
     assert report["sheet"] is True
-    # Rooted at the lower end; the last joint is pulled back like a limb tip (where the last part starts).
-    tip = 2.0 - GeometricParams().tip_pull
-    np.testing.assert_allclose(skeleton.positions, [[0, 0, 0], [0, 1, 0], [0, tip, 0]], atol=1e-9)
-    assert skeleton.parents.tolist() == [-1, 0, 1]
+    # Rooted at the lower end; a joint where each of its two width-long segments starts, none on the far edge
+    # (SimpleSkin's own rig).
+    np.testing.assert_allclose(skeleton.positions, [[0, 0, 0], [0, 1, 0]], atol=1e-9)
+    assert skeleton.parents.tolist() == [-1, 0]
 
 
 def test_two_solids_far_apart_are_not_a_sheet():
