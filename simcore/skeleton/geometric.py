@@ -30,6 +30,7 @@ from simcore.skeleton.types import JointKind, Skeleton
 
 
 STUB_VOXELS = 0.5  # a bone shorter than this many voxels is no bone: its child joint goes
+RADIUS_SMOOTH = 5  # medial voxels averaged when a limb's thickness profile is read
 SHEET_PART_AREA = 0.01  # parts with less of the area (a button on a flag) do not decide whether it is a sheet
 
 
@@ -156,9 +157,6 @@ def _leg_tip(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad:
     paired = plane is None or abs(pos[tip, plane.axis] - plane.offset) > float(np.median(rad[nodes]))
     long_enough = path_length(pos, nodes) >= spacing
     return end if upright and on_floor and paired and long_enough else None
-
-
-RADIUS_SMOOTH = 5  # medial voxels averaged when a limb's thickness profile is read
 
 
 def _head_at_neck(nodes: list[int], interior: list[int], adjacency: list[list[int]], pos: np.ndarray,
