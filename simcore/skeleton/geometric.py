@@ -8,6 +8,7 @@ closest joint pair, so the result is one Skeleton; the report says how many bodi
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -130,6 +131,16 @@ def _leaf_end(nodes: list[int], adjacency: list[list[int]]) -> int | None:
     return leaves[0] if len(leaves) == 1 else None
 
 
+def _from_junction(nodes: list[int], end: int, pos: np.ndarray) -> tuple[np.ndarray, Callable[[int], int], np.ndarray]:
+    """A limb branch `nodes` whose leaf is at index `end` (0 or last), read from its junction to its tip: (the node
+    ids junction → tip, the map between an index into `nodes` and one into that path (its own inverse), the arc
+    length at each node of the path, metres)."""
+    last = len(nodes) - 1
+    path = np.asarray(nodes if end == last else nodes[::-1])
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pos[path], axis=0), axis=1))])
+    return path, (lambda i: i) if end == last else (lambda i: last - i), arc
+
+
 def _leg_tip(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad: np.ndarray, ground: _Ground,
              params: GeometricParams, scale: float, spacing: float) -> int | None:
     """0 or len(nodes) - 1: which end of the branch `nodes` is the foot when the branch is a leg; else None.
@@ -175,9 +186,7 @@ def _head_at_neck(nodes: list[int], interior: list[int], adjacency: list[list[in
     end, plane = _leaf_end(nodes, adjacency), ground.plane
     if end is None or plane is None or abs(pos[nodes[end], plane.axis] - plane.offset) > rad[nodes[end]]:
         return interior
-    last = len(nodes) - 1
-    flip = (lambda i: i) if end == last else (lambda i: last - i)  # branch index <-> index from the junction
-    path = np.asarray(nodes if end == last else nodes[::-1])
+    path, flip, arc = _from_junction(nodes, end, pos)
     r = ndimage.uniform_filter1d(rad[path].astype(np.float64), RADIUS_SMOOTH, mode="nearest")
     lo, hi = max(2, len(path) // 10), len(path) - max(2, len(path) // 10)
     if hi - lo < 3:
@@ -186,7 +195,6 @@ def _head_at_neck(nodes: list[int], interior: list[int], adjacency: list[list[in
     if widest == lo or r[widest] < params.head_widen * float(r[lo:widest].min()):
         return interior
     neck = lo + int(np.flatnonzero(r[lo:widest] <= params.neck_tol * float(r[lo:widest].min()))[-1])
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pos[path], axis=0), axis=1))])
     keep = [i for i in interior if arc[flip(i)] < arc[neck] - params.limb_gap * spacing]
     return sorted(keep + [flip(neck)])
 
@@ -205,18 +213,13 @@ def _with_limb_root(nodes: list[int], interior: list[int], adjacency: list[list[
     end = _leaf_end(nodes, adjacency)
     if end is None or len(nodes) < 3:
         return interior
-    last = len(nodes) - 1
-    leaf_end = end == last
-    flip = (lambda i: i) if leaf_end else (lambda i: last - i)  # branch index <-> index from the junction
-    path = np.asarray(nodes if leaf_end else nodes[::-1])  # junction → tip
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pos[path], axis=0), axis=1))])
+    path, flip, arc = _from_junction(nodes, end, pos)
     exit_at = limb_exit(rad[path], params.limb_exit)
     taken = [0.0] + [float(arc[flip(i)]) for i in interior]  # the junction and the joints already there
     near = min(abs(a - arc[exit_at]) for a in taken) <= params.limb_gap * spacing
-    if not 0 < exit_at < last or arc[-1] - arc[exit_at] <= spacing or near:
+    if not 0 < exit_at < len(path) - 1 or arc[-1] - arc[exit_at] <= spacing or near:
         return interior
-    index = flip(exit_at)
-    return sorted(interior + [index])
+    return sorted(interior + [flip(exit_at)])
 
 
 def _connect_bodies(graph: _JointGraph, order: list[int]) -> int:
@@ -325,8 +328,8 @@ def _midline_ends(skeleton: Skeleton, twins: MirrorTwins) -> np.ndarray:
     on_plane = twins.twin == own
     hub = np.zeros(skeleton.num_joints, bool)  # a joint with a child off the mirror plane: the body, not a fork
     hub[parents[(parents >= 0) & ~on_plane]] = True
-    up = np.maximum(parents, 0)
-    chain_end = (parents >= 0) & (((degree[up] == 2) & (parents[up] >= 0)) | ~hub[up])
+    parent = np.maximum(parents, 0)  # the root stands in for its own parent (masked out by parents >= 0)
+    chain_end = (parents >= 0) & (((degree[parent] == 2) & (parents[parent] >= 0)) | ~hub[parent])
     ends = (degree == 1) & chain_end & on_plane
     if not (degree >= 3).any() or np.count_nonzero(~ends) < 2:
         return np.zeros(skeleton.num_joints, bool)

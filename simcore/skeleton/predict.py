@@ -64,6 +64,8 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
                            code="invalid_option", field="options.skeleton")
     if max_joints < 2:
         raise InvalidInput("max_joints must be at least 2", code="invalid_option", field="options.max_joints")
+    up = axis(up_axis, "up_axis")  # both checked before any work, whichever method runs
+    axis(forward_axis, "forward_axis")
     v, f = _check_mesh(vertices, faces)
     timings: dict[str, float] = {}
     report: dict[str, Any] = {"requested": method}
@@ -93,7 +95,6 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
             report["timings_s"] = timings
             return SkeletonPrediction(fit.skeleton, "humanoid", report)
     started = time.perf_counter()
-    up = axis(up_axis, "up_axis")
     skeleton, geo_report = geometric_skeleton(v, f, max_joints=max_joints, parts=parts,
                                               up=GLTF_UP if up is None else up)
     timings["geometric"] = round(time.perf_counter() - started, 3)

@@ -135,14 +135,14 @@ def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, drop
     `dropped` (J,) bool mask carried over to it (new joints False), how many joints were added).
 
     A twinless joint j, not dropped, whose parent has a twin p' (the parent itself when on the plane) qualifies when
-    its mirror image lies in the solid with no joint within TWIN_BARE × size, and it is
+    its mirror image lies in the solid with no joint (nor image added before it) within TWIN_BARE × size, and it is
     - a leaf: the image hangs from p' (thinning ended a foot one voxel sooner on the other side);
     - a joint with one child whose twin hangs from p': the image goes between the two (a chain one joint longer
       on one side: a turning point found on one side only).
     No image is added that would take the joints not dropped past `max_joints`.
     """
     pos, parents, twin = skeleton.positions, skeleton.parents.copy(), twins.twin
-    children, tree, scale = skeleton.children(), cKDTree(pos), twins.size
+    children, scale = skeleton.children(), twins.size
     key = list(np.arange(skeleton.num_joints, dtype=np.float64))  # children are visited by key: images slot in
     added: list[np.ndarray] = []
     new_parents: list[int] = []
@@ -154,7 +154,8 @@ def complete_twins(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid, drop
         if twin[j] >= 0 or dropped[j] or twin[p] < 0 or dropped[twin[p]] or len(children[j]) > 1:
             continue
         image = twins.plane.reflect(pos[j:j + 1])
-        if not grid.inside(image)[0] or tree.query(image)[0][0] <= TWIN_BARE * scale:
+        nearest = float(np.linalg.norm(np.vstack([pos, *added]) - image, axis=1).min())  # images added so far too
+        if not grid.inside(image)[0] or nearest <= TWIN_BARE * scale:
             continue
         new = skeleton.num_joints + len(added)
         if children[j]:

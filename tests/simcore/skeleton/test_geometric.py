@@ -96,6 +96,10 @@ def test_predict_rejects_empty_meshes_and_unknown_methods(dog):
     with pytest.raises(InvalidInput) as err:
         predict_skeleton(vertices, faces, method="magic")
     assert err.value.field == "options.skeleton"
+    for option in ("up_axis", "forward_axis"):  # whichever method runs (the geometric one reads no facing)
+        with pytest.raises(InvalidInput) as err:
+            predict_skeleton(vertices, faces, method="geometric", **{option: "sideways"})
+        assert err.value.field == f"options.{option}"
 
 
 def test_predict_geometric_reports_method_and_timing(dog):
@@ -106,7 +110,7 @@ def test_predict_geometric_reports_method_and_timing(dog):
     np.testing.assert_array_equal(prediction.skeleton.positions, skeleton.positions)
 
 
-def test_flat_strip_gets_an_end_to_end_chain_along_its_length():
+def test_flat_strip_gets_a_joint_where_each_segment_starts():
     # The glTF SimpleSkin layout: a 1 × 2 strip in the XY plane, no thickness to voxelise.
     xs, ys = np.meshgrid([-0.5, 0.5], np.linspace(0.0, 2.0, 5))
     vertices = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(10)])

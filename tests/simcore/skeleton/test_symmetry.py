@@ -107,6 +107,18 @@ def test_a_joint_found_on_one_side_only_gets_its_twin_on_the_other():
     assert complete_twins(near, _twins(near.positions, near.parents, grid, vertices), grid, np.zeros(7, bool))[2] == 0
 
 
+def test_two_twinless_joints_side_by_side_get_one_image_not_two_on_one_spot():
+    """A foot tip and a toe 0.015 apart on the left, none on the right: their mirror images would coincide."""
+    _, _, grid, vertices = _box_creature()
+    positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-1.0, 0, 0], [-1.0, -0.3, 0], [-1.0, -0.3, 0.015], [0.5, 0, 0],
+                          [1.0, 0, 0]], float)
+    parents = np.array([-1, 0, 1, 2, 2, 0, 5])
+    skeleton = _skeleton(positions, parents)
+    whole, _, added = complete_twins(skeleton, _twins(positions, parents, grid, vertices), grid, np.zeros(7, bool))
+    assert added == 1
+    assert np.linalg.norm(whole.positions[whole.positions[:, 0] > 0.9] - [1.0, -0.3, 0.0], axis=1).min() < 0.02
+
+
 def test_a_chain_one_joint_longer_on_one_side_gets_the_joint_on_the_other():
     _, _, grid, vertices = _box_creature()
     positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-0.8, -0.1, 0], [-1.0, -0.3, 0], [0.5, 0, 0], [1.0, -0.3, 0]],
