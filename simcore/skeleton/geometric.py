@@ -19,6 +19,7 @@ from scipy.sparse.csgraph import dijkstra
 from simcore.geometry.parts import SurfacePart, flat_normal, principal_frame, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.axes import GLTF_UP
+from simcore.skeleton.edge_loops import edge_loops
 from simcore.skeleton.graph_simplify import (branch_joints, branches, limb_exit, merge_junctions, path_length,
                                              prune_spurs)
 from simcore.skeleton.hub_split import HubSplit, split_hubs
@@ -62,6 +63,7 @@ class GeometricParams:
     leg_upright: float = 0.75  # ...when it runs at least this steeply along the up axis (|cos|)...
     floor_gap: float = 0.05  # ...and its tip reaches down to within this of the mesh's lowest point
     leg_tip_pull: float = 0.3  # a leg's foot joint moves only this share towards its parent (0 / 0.3 / 0.5 alike)
+    loop_gap: float = 0.5  # a junction-free body whose vertices lie on rings this × its thickness apart: low-poly tube
     head_widen: float = 1.3  # a mid-plane limb widening again to this × its thinnest is a head on a neck...
     neck_tol: float = 1.1  # ...pivoting where the neck is within this × its thinnest, nearest the head
 
@@ -261,15 +263,26 @@ def _choose_root(pos: np.ndarray, edges: np.ndarray, main: np.ndarray, centre: n
     to_leaf = dijkstra(adj, directed=False, indices=leaves, min_only=True)
     to_centre = np.linalg.norm(pos - centre, axis=1)
     junctions = np.flatnonzero((degree >= 3) & main)
-    if len(junctions) == 0:  # a chain: rooted at its lower end (+Y up), or its back (-Z) end when level
+    if len(junctions) == 0:  # a chain: rooted at an end, as animators rig chains
         ends = np.flatnonzero((degree <= 1) & main) if (degree[main] <= 1).any() else np.flatnonzero(main)
-        span = float(np.ptp(pos[main], axis=0).max()) or 1.0
-        low = ends[pos[ends, 1] < pos[ends, 1].min() + 0.1 * span]  # within a tenth of the length of the lowest
-        return int(low[np.argmin(pos[low, 2])])
+        return int(ends[_chain_start(pos[ends], float(np.ptp(pos[main], axis=0).max()))])
     # Longest-to-nearest-endpoint first; a 5 % band counts as a tie broken by distance to the centre of mass.
     best = to_leaf[junctions].max()
     near = junctions[to_leaf[junctions] >= 0.95 * best]
     return int(near[np.argmin(to_centre[near])])
+
+
+def _chain_start(ends: np.ndarray, span: float) -> int:
+    """Index into `ends` (N, 3), a chain's end joints, of the one it is rooted at: the lowest (+Y up), or the back
+    (-Z) one among those within a tenth of `span` (the chain's length) of the lowest, when it lies level."""
+    low = np.flatnonzero(ends[:, 1] < ends[:, 1].min() + 0.1 * (span or 1.0))
+    return int(low[np.argmin(ends[low, 2])])
+
+
+def _from_start(chain: np.ndarray) -> np.ndarray:
+    """The joints `chain` (J, 3) of a chain, in order from the end it is rooted at (`_chain_start`)."""
+    span = float(np.ptp(chain, axis=0).max())
+    return chain if _chain_start(chain[[0, -1]], span) == 0 else chain[::-1]
 
 
 def _rooted_order(n: int, edges: np.ndarray, root: int, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -382,7 +395,7 @@ def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_join
     mid = 0.5 * (local.min(axis=0) + local.max(axis=0))
     t = local[:, 0].min() + extent[0] * np.arange(segments + 1) / segments
     chain = centre + (mid[None, :] * [0, 1, 1] + t[:, None] * [1, 0, 0]) @ axes
-    return (chain if chain[0, 1] <= chain[-1, 1] else chain[::-1])[:-1]  # root at the lower end (+Y up)
+    return _from_start(chain)[:-1]
 
 
 def rank_bodies(grid: VoxelGrid, forest: MedialForest) -> tuple[list[int], dict[int, int], np.ndarray]:
@@ -470,6 +483,12 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
             spur_min *= 1.5
         elif len(kept) > 1:
             kept = kept[:-1]
+    degree = np.bincount(np.asarray(graph.edges, dtype=np.int64).ravel(), minlength=len(graph.positions))
+    loops = edge_loops(v, params.loop_gap) if len(kept) == 1 and degree.max(initial=0) <= 2 else None
+    if loops is not None and len(loops) - 1 <= max_joints:  # a low-poly tube: a joint at each ring but the far one
+        skeleton = _free_skeleton(snap_inside(grid, _from_start(loops)[:-1]), np.arange(-1, len(loops) - 2))
+        return skeleton, {"edge_loops": len(loops), "joints": skeleton.num_joints, "bodies": 1,
+                          "resolution": params.resolution, "voxel_pitch": grid.pitch}
     joined = _connect_bodies(graph, list(range(len(kept)))) if len(kept) > 1 else 0
 
     pos = np.asarray(graph.positions, dtype=np.float64).reshape(-1, 3)
