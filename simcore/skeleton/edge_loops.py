@@ -16,17 +16,19 @@ from simcore.geometry.parts import principal_frame
 
 LOOP_TOL = 1e-3  # × the tube's length: vertices this close along its axis lie on one ring
 LOOP_MIN_VERTICES = 3  # a ring has at least a triangle's worth of vertices
+TUBE_ELONGATION = 2.0  # a tube is at least this many times longer than it is thick (a squat block is no tube)
 
 
 def edge_loops(vertices: np.ndarray, min_gap: float) -> np.ndarray | None:
     """(K, 3) ring centres in order along the principal axis when every vertex of `vertices` (V, 3) lies on one of
     K ≥ 3 rings across that axis, at least `min_gap` × the tube's thickness apart (a finely tessellated tube, with
-    rings closer than that, is no low-poly tube: it bends anywhere); else None.
+    rings closer than that, is no low-poly tube: it bends anywhere), on a body TUBE_ELONGATION × longer than thick;
+    else None.
     """
     vertices = np.asarray(vertices, dtype=np.float64)
     _, _, local = principal_frame(vertices)
     length, thickness = float(np.ptp(local[:, 0])), float(np.ptp(local[:, 1:], axis=0).max())
-    if length <= 0:
+    if length <= 0 or length < TUBE_ELONGATION * thickness:
         return None
     order = np.argsort(local[:, 0], kind="stable")
     t = local[order, 0]
