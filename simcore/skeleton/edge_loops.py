@@ -21,7 +21,7 @@ TUBE_ELONGATION = 2.0  # a tube is at least this many times longer than it is th
 
 def edge_loops(vertices: np.ndarray, min_gap: float) -> np.ndarray | None:
     """(K, 3) ring centres in order along the principal axis when every vertex of `vertices` (V, 3) lies on one of
-    K ≥ 3 rings across that axis, at least `min_gap` × the tube's thickness apart (a finely tessellated tube, with
+    K ≥ 3 flat rings across that axis, at least `min_gap` × the tube's thickness apart (a finely tessellated tube, with
     rings closer than that, is no low-poly tube: it bends anywhere), on a body TUBE_ELONGATION × longer than thick;
     else None.
     """
@@ -35,6 +35,10 @@ def edge_loops(vertices: np.ndarray, min_gap: float) -> np.ndarray | None:
     ring = np.concatenate([[0], np.cumsum(np.diff(t) > LOOP_TOL * length)])
     counts = np.bincount(ring)
     if len(counts) < 3 or counts.min() < LOOP_MIN_VERTICES:
+        return None
+    starts = np.flatnonzero(np.diff(ring)) + 1
+    widths = np.maximum.reduceat(t, np.r_[0, starts]) - np.minimum.reduceat(t, np.r_[0, starts])
+    if widths.max() > LOOP_TOL * length:  # vertices chained along the axis: a band, not a ring
         return None
     level = np.bincount(ring, weights=t) / counts
     if np.diff(level).min() < min_gap * thickness:

@@ -45,6 +45,9 @@ def test_edge_loops_are_the_ring_centres_in_order():
     (low_poly_tube(np.array([0.0, 2.0]), 0.15, axis=1)[0], "two rings: a rigid stick, nothing to bend"),
     (np.vstack([low_poly_tube(LEVELS, 0.15, axis=1)[0], [[0.1, 0.9, 0.0]]]), "a vertex between the rings"),
     (low_poly_tube(np.array([0.0, 0.5, 1.0]), 0.45, axis=1)[0], "three rings on a block not twice as long as thick"),
+    (low_poly_tube(np.concatenate([np.linspace(0.0, 0.2, 300), np.linspace(0.9, 1.1, 300),
+                                   np.linspace(1.8, 2.0, 300)]), 0.15, axis=1)[0],
+     "three dense bands of rings, chained into three wide groups"),
     (capsule_between(np.zeros(3), np.array([0.0, 2.0, 0.0]), 0.15).vertices, "a smooth capsule"),
 ])
 def test_no_edge_loops_where_the_mesh_is_not_a_low_poly_tube(vertices: np.ndarray, why: str):
