@@ -26,6 +26,7 @@ from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.mirror import MirrorPlane, mirror_plane
+from simcore.skeleton.section_centre import SECTION_LIMIT, centre_in_section
 from simcore.skeleton.symmetry import (MirrorTwins, body_mirror, complete_twins, lopsided_branches, mirror_report,
                                       mirror_twins, symmetrize)
 from simcore.skeleton.types import JointKind, Skeleton
@@ -63,6 +64,7 @@ class GeometricParams:
     leg_upright: float = 0.75  # ...when it runs at least this steeply along the up axis (|cos|)...
     floor_gap: float = 0.05  # ...and its tip reaches down to within this of the mesh's lowest point
     leg_tip_pull: float = 0.3  # a leg's foot joint moves only this share towards its parent (0 / 0.3 / 0.5 alike)
+    section_limit: float = SECTION_LIMIT  # voxels a chain joint may move towards its limb's cross-section centre
     loop_gap: float = 0.5  # a junction-free body whose vertices lie on rings this × its thickness apart: low-poly tube
     head_widen: float = 1.3  # a mid-plane limb widening again to this × its thinnest is a head on a neck...
     neck_tol: float = 1.1  # ...pivoting where the neck is within this × its thinnest, nearest the head
@@ -503,6 +505,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     if np.count_nonzero(parents == 0) == 1:  # a chain's root is its end: thinning stopped a radius short of it
         depth = base.radius[int(np.argmin(np.linalg.norm(base.positions - pos[0], axis=1)))]
         pos[0] = _extend_end(pos[0], pos[np.flatnonzero(parents == 0)[0]], params.root_push * depth)
+    pos = centre_in_section(pos, parents, grid, params.section_limit)
     twins = None if plane is None else mirror_twins(pos, parents, grid, plane)
     if twins is not None:
         pos = symmetrize(pos, twins)

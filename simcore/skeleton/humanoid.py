@@ -30,6 +30,7 @@ from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.graph_simplify import limb_exit, path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.hands import fit_fingers
 from simcore.skeleton.inside import snap_inside
+from simcore.skeleton.section_centre import centre_in_section
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
 from simcore.skeleton.symmetry import body_mirror, mirror_report, mirror_twins, symmetrize
@@ -440,7 +441,7 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
             parents.append(chain.parent if i == 0 else first + i - 1)
         added += 1
     report["extra_limbs"] = added
-    pos = np.asarray(positions)
+    pos = centre_in_section(np.asarray(positions), np.asarray(parents), grid)
     plane = body_mirror(v)
     twins = None if plane is None else mirror_twins(pos, np.asarray(parents), grid, plane, names)
     report["mirror"] = mirror_report(twins)

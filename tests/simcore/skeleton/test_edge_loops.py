@@ -41,7 +41,7 @@ def test_edge_loops_are_the_ring_centres_in_order():
 
 
 @pytest.mark.parametrize(("vertices", "why"), [
-    (low_poly_tube(np.linspace(0.0, 2.0, 21), 0.15, axis=1)[0], "rings 0.1 apart on a tube 0.3 thick: fine tessellation"),
+    (low_poly_tube(np.linspace(0.0, 2.0, 21), 0.15, axis=1)[0], "rings 0.1 apart, 0.3 thick: fine tessellation"),
     (low_poly_tube(np.array([0.0, 2.0]), 0.15, axis=1)[0], "two rings: a rigid stick, nothing to bend"),
     (np.vstack([low_poly_tube(LEVELS, 0.15, axis=1)[0], [[0.1, 0.9, 0.0]]]), "a vertex between the rings"),
     (low_poly_tube(np.array([0.0, 0.5, 1.0]), 0.45, axis=1)[0], "three rings on a block not twice as long as thick"),

@@ -175,9 +175,11 @@ def test_a_stubby_tube_bends_only_where_segments_are_longer_than_it_is_thick():
 
 
 def _pulled_share(vertices: np.ndarray, faces: np.ndarray, picked) -> np.ndarray:
-    """How far (share of the way to the parent) the leaves `picked(positions) -> mask` were moved in."""
-    raw, _ = geometric_skeleton(vertices, faces, params=GeometricParams(tip_pull=0.0, leg_tip_pull=0.0))
-    pulled, _ = geometric_skeleton(vertices, faces)
+    """How far (share of the way to the parent) the leaves `picked(positions) -> mask` were moved in (with no
+    sub-voxel centring, which moves them across their bone afterwards)."""
+    unpulled = GeometricParams(tip_pull=0.0, leg_tip_pull=0.0, section_limit=0.0)
+    raw, _ = geometric_skeleton(vertices, faces, params=unpulled)
+    pulled, _ = geometric_skeleton(vertices, faces, params=GeometricParams(section_limit=0.0))
     assert raw.parents.tolist() == pulled.parents.tolist()
     leaf = np.setdiff1d(np.arange(raw.num_joints), raw.parents)
     leaf = leaf[picked(raw.positions[leaf])]
