@@ -1,14 +1,15 @@
 """Geometric skeleton for any mesh: solid voxels → medial forest → joint graph → rooted tree.
 
 Works on real game meshes (holes, several components, self-intersections) because everything downstream of
-`solid_voxels` sees only a closed voxel solid. Joints are medial voxel centres (inside the solid). Several
-disconnected bodies each get their own tree and are then hung under the largest body's tree at their
-closest joint pair, so the result is one Skeleton; the report says how many bodies were joined.
+`solid_voxels` sees only a closed voxel solid. Joints are medial voxel centres, refined within their voxel towards
+the centre of their limb's cross-section (`section_centre`). Several disconnected bodies each get their own tree
+and are then hung under the largest body's tree at their closest joint pair, so the result is one Skeleton; the
+report says how many bodies were joined. The rules for one limb are in `limb_rules`; chains and flat sheets in
+`chains`; low-poly tubes in `edge_loops`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,16 +17,17 @@ import scipy.sparse as sp
 from scipy import ndimage
 from scipy.sparse.csgraph import dijkstra
 
-from simcore.geometry.parts import SurfacePart, flat_normal, principal_frame, surface_parts
+from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.axes import GLTF_UP
+from simcore.skeleton.chains import chain_start, from_start, sheet_chain
 from simcore.skeleton.edge_loops import edge_loops
-from simcore.skeleton.graph_simplify import (branch_joints, branches, limb_exit, merge_junctions, path_length,
-                                             prune_spurs)
+from simcore.skeleton.graph_simplify import branch_joints, branches, merge_junctions, path_length, prune_spurs
 from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
+from simcore.skeleton.limb_rules import Ground, head_at_neck, leg_tip, with_limb_root
 from simcore.skeleton.medial import MedialForest, medial_forest
-from simcore.skeleton.mirror import MirrorPlane, mirror_plane
+from simcore.skeleton.mirror import mirror_plane
 from simcore.skeleton.section_centre import SECTION_LIMIT, centre_in_section
 from simcore.skeleton.symmetry import (MirrorTwins, body_mirror, complete_twins, lopsided_branches, mirror_report,
                                       mirror_twins, symmetrize)
@@ -33,8 +35,6 @@ from simcore.skeleton.types import JointKind, Skeleton
 
 
 STUB_VOXELS = 0.5  # a bone shorter than this many voxels is no bone: its child joint goes
-RADIUS_SMOOTH = 5  # medial voxels averaged when a limb's thickness profile is read
-SHEET_PART_AREA = 0.01  # parts with less of the area (a button on a flag) do not decide whether it is a sheet
 
 
 @dataclass(frozen=True)
@@ -70,15 +70,6 @@ class GeometricParams:
     neck_tol: float = 1.1  # ...pivoting where the neck is within this × its thinnest, nearest the head
 
 
-@dataclass(frozen=True)
-class _Ground:
-    """What tells a leg: the up axis (unit), the mesh's lowest point along it, its mirror plane (None: none)."""
-
-    up: np.ndarray
-    floor: float
-    plane: MirrorPlane | None
-
-
 @dataclass
 class _JointGraph:
     positions: list[np.ndarray]
@@ -88,7 +79,7 @@ class _JointGraph:
 
 
 def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParams, scale: float, spacing: float,
-                 ground: _Ground, graph: _JointGraph, body: int) -> int:
+                 ground: Ground, graph: _JointGraph, body: int) -> int:
     """Add one body's joints and edges to `graph`; returns how many joints it added."""
     adjacency, pos, rad = forest.adjacency, forest.positions, forest.radius
     keys, brs = branches(adjacency, nodes)
@@ -109,12 +100,12 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
         graph.positions.append(merged[r])
         graph.body.append(body)
     for b in brs:
-        leg = _leg_tip(b.nodes, adjacency, pos, rad, ground, params, scale, spacing) if len(brs) > 1 else None
+        leg = leg_tip(b.nodes, adjacency, pos, rad, ground, params, scale, spacing) if len(brs) > 1 else None
         step = spacing if leg is None else min(spacing, path_length(pos, b.nodes) / params.leg_segments)
         interior = branch_joints(pos[b.nodes], rad[b.nodes], params.turn_ratio, params.turn_min * scale, step)
         if len(brs) > 1:
-            interior = _with_limb_root(b.nodes, interior, adjacency, pos, rad, params, spacing)
-            interior = _head_at_neck(b.nodes, interior, adjacency, pos, rad, ground, params, spacing)
+            interior = with_limb_root(b.nodes, interior, adjacency, pos, rad, params, spacing)
+            interior = head_at_neck(b.nodes, interior, adjacency, pos, rad, ground, params, spacing)
         chain = [slot[rep[b.start]]]
         for i in interior:
             chain.append(len(graph.positions))
@@ -126,104 +117,6 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
             graph.leg_tips.add(chain[0] if leg == 0 else chain[-1])
     graph.edges += [(slot[a], slot[b]) for a, b in split.links]
     return len(graph.positions) - base
-
-
-def _leaf_end(nodes: list[int], adjacency: list[list[int]]) -> int | None:
-    """0 or len(nodes) - 1: the end of the branch `nodes` that is a leaf, when exactly one is (a limb); else None.
-    Keys at or past len(adjacency) are junctions made by split_hubs, never leaves."""
-    leaves = [i for i in (0, len(nodes) - 1) if nodes[i] < len(adjacency) and len(adjacency[nodes[i]]) == 1]
-    return leaves[0] if len(leaves) == 1 else None
-
-
-def _from_junction(nodes: list[int], end: int, pos: np.ndarray) -> tuple[np.ndarray, Callable[[int], int], np.ndarray]:
-    """A limb branch `nodes` whose leaf is at index `end` (0 or last), read from its junction to its tip: (the node
-    ids junction → tip, the map between an index into `nodes` and one into that path (its own inverse), the arc
-    length at each node of the path, metres)."""
-    last = len(nodes) - 1
-    path = np.asarray(nodes if end == last else nodes[::-1])
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pos[path], axis=0), axis=1))])
-    return path, (lambda i: i) if end == last else (lambda i: last - i), arc
-
-
-def _leg_tip(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad: np.ndarray, ground: _Ground,
-             params: GeometricParams, scale: float, spacing: float) -> int | None:
-    """0 or len(nodes) - 1: which end of the branch `nodes` is the foot when the branch is a leg; else None.
-
-    A leg is a limb (junction to tip) at least `spacing` long that runs steeply along the up axis, whose tip
-    reaches down to the floor and, on a symmetric body, lies off the mirror plane (one of a pair, not a tail or a
-    hanging body). Artists give it a hip or shoulder, a knee or elbow, an ankle or wrist and a foot: it gets a
-    joint at least every 1 / `leg_segments` of its length, where an even split by `spacing` gives two or three,
-    and its foot joint stays nearer the floor (`leg_tip_pull`). Measured on the dev rigs (auto), four segments
-    against none: the fox 0.0438 → 0.0397, quadruped_a 0.0532 → 0.0462, lizard 0.0308 → 0.0276, others unchanged;
-    3 and 5 segments also better (geometric assets 0.0382 → 0.0376, 0.0372 against 0.0370); steepness 0.75-0.8
-    the same, 0.5-0.7 also take the fish's slanting pectoral fins (0.0384 → 0.0396), 0.85 loses one of
-    quadruped_a's legs. The foot pulled 0.3 instead of 0.7 of the way in (measured with symmetry.TWIN_BARE still
-    at 0.03): fox 0.0381, quadruped_a 0.0452, lizard 0.0263 (geometric assets 0.0370 → 0.0367; 0 and 0.5 give
-    0.0367 and 0.0368), and no 1 cm last bone on the lizard.
-    """
-    end = _leaf_end(nodes, adjacency)
-    if end is None:
-        return None
-    tip, start = nodes[end], nodes[len(nodes) - 1 - end]
-    chord = pos[tip] - pos[start]
-    upright = abs(float(chord @ ground.up)) >= params.leg_upright * float(np.linalg.norm(chord))
-    on_floor = float(pos[tip] @ ground.up) - rad[tip] <= ground.floor + params.floor_gap * scale
-    plane = ground.plane  # off it by more than the limb is thick: one of a pair
-    paired = plane is None or abs(pos[tip, plane.axis] - plane.offset) > float(np.median(rad[nodes]))
-    long_enough = path_length(pos, nodes) >= spacing
-    return end if upright and on_floor and paired and long_enough else None
-
-
-def _head_at_neck(nodes: list[int], interior: list[int], adjacency: list[list[int]], pos: np.ndarray,
-                  rad: np.ndarray, ground: _Ground, params: GeometricParams, spacing: float) -> list[int]:
-    """`interior` (indices into the branch `nodes`) with a head's joints replaced by one at its neck.
-
-    A head is the end of a limb whose tip lies on the mirror plane and which widens again, beyond its thinnest
-    point, to at least `head_widen` × that thickness (a skull beyond a neck). A skull does not bend, so joints
-    inside it only let it buckle: it gets one joint, its pivot, where the neck is thinnest next to it (the last
-    point within `neck_tol` of the thinnest, as a long neck is thin all along), and joints of the neck closer than
-    `limb_gap` × spacing to that point go. Its tip then ends the chain as a midline end (`_midline_ends`).
-    The first and last tenth of the limb are not read: the junction's ball and the tip's cap.
-    Measured on the dev rigs (auto): quadruped_a 0.0406 → 0.0355 (B2B 0.0271 → 0.0206), the only one it fires on;
-    `head_widen` 1.2-1.6 the same, `neck_tol` 1.0 / 1.2 give 0.0356 / 0.0352.
-    """
-    end, plane = _leaf_end(nodes, adjacency), ground.plane
-    if end is None or plane is None or abs(pos[nodes[end], plane.axis] - plane.offset) > rad[nodes[end]]:
-        return interior
-    path, flip, arc = _from_junction(nodes, end, pos)
-    r = ndimage.uniform_filter1d(rad[path].astype(np.float64), RADIUS_SMOOTH, mode="nearest")
-    lo, hi = max(2, len(path) // 10), len(path) - max(2, len(path) // 10)
-    if hi - lo < 3:
-        return interior
-    widest = lo + int(np.argmax(r[lo:hi]))
-    if widest == lo or r[widest] < params.head_widen * float(r[lo:widest].min()):
-        return interior
-    neck = lo + int(np.flatnonzero(r[lo:widest] <= params.neck_tol * float(r[lo:widest].min()))[-1])
-    keep = [i for i in interior if arc[flip(i)] < arc[neck] - params.limb_gap * spacing]
-    return sorted(keep + [flip(neck)])
-
-
-def _with_limb_root(nodes: list[int], interior: list[int], adjacency: list[list[int]], pos: np.ndarray,
-                    rad: np.ndarray, params: GeometricParams, spacing: float) -> list[int]:
-    """`interior` (indices into the branch `nodes`) plus a joint where a limb leaves the body, when it has none.
-
-    A limb is a branch from a junction to a leaf. Its first joint belongs where it leaves the body (the hip or
-    shoulder it swings about, as artists and the humanoid fit place it), not at the medial junction deep inside the
-    body; it is added only when the limb goes on for at least `spacing` past that point, so short end parts do not
-    get a second joint, nor when the junction or a joint is within `limb_gap` × spacing of it (no stub bones).
-    Measured on the dev rigs (auto): J2J 0.0348 → 0.0344 (lizard, penguin, quadruped_a and dragon better, none
-    worse), B2B 0.0176 either way.
-    """
-    end = _leaf_end(nodes, adjacency)
-    if end is None or len(nodes) < 3:
-        return interior
-    path, flip, arc = _from_junction(nodes, end, pos)
-    exit_at = limb_exit(rad[path], params.limb_exit)
-    taken = [0.0] + [float(arc[flip(i)]) for i in interior]  # the junction and the joints already there
-    near = min(abs(a - arc[exit_at]) for a in taken) <= params.limb_gap * spacing
-    if not 0 < exit_at < len(path) - 1 or arc[-1] - arc[exit_at] <= spacing or near:
-        return interior
-    return sorted(interior + [flip(exit_at)])
 
 
 def _connect_bodies(graph: _JointGraph, order: list[int]) -> int:
@@ -267,24 +160,11 @@ def _choose_root(pos: np.ndarray, edges: np.ndarray, main: np.ndarray, centre: n
     junctions = np.flatnonzero((degree >= 3) & main)
     if len(junctions) == 0:  # a chain: rooted at an end, as animators rig chains
         ends = np.flatnonzero((degree <= 1) & main) if (degree[main] <= 1).any() else np.flatnonzero(main)
-        return int(ends[_chain_start(pos[ends], float(np.ptp(pos[main], axis=0).max()))])
+        return int(ends[chain_start(pos[ends], float(np.ptp(pos[main], axis=0).max()))])
     # Longest-to-nearest-endpoint first; a 5 % band counts as a tie broken by distance to the centre of mass.
     best = to_leaf[junctions].max()
     near = junctions[to_leaf[junctions] >= 0.95 * best]
     return int(near[np.argmin(to_centre[near])])
-
-
-def _chain_start(ends: np.ndarray, span: float) -> int:
-    """Index into `ends` (N, 3), a chain's end joints, of the one it is rooted at: the lowest (+Y up), or the back
-    (-Z) one among those within a tenth of `span` (the chain's length) of the lowest, when it lies level."""
-    low = np.flatnonzero(ends[:, 1] < ends[:, 1].min() + 0.1 * (span or 1.0))
-    return int(low[np.argmin(ends[low, 2])])
-
-
-def _from_start(chain: np.ndarray) -> np.ndarray:
-    """The joints `chain` (J, 3) of a chain, in order from the end it is rooted at (`_chain_start`)."""
-    span = float(np.ptp(chain, axis=0).max())
-    return chain if _chain_start(chain[[0, -1]], span) == 0 else chain[::-1]
 
 
 def _rooted_order(n: int, edges: np.ndarray, root: int, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -372,34 +252,6 @@ def _extend_end(end: np.ndarray, inner: np.ndarray, distance: float) -> np.ndarr
     return end + distance * step / max(float(np.linalg.norm(step)), 1e-12)
 
 
-def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_joints: int) -> np.ndarray | None:
-    """(J, 3) joints of a chain along the principal axis when the mesh is a flat sheet, else None.
-
-    parts: the mesh's connected parts (surface_parts). A sheet (thickness < `ratio` × length) has no solid to
-    thin; artists rig a strip, flag or card as one chain of even segments, max(`spacing`, sheet width) long, with
-    a joint where each segment starts (the segment's pivot) and none on the far edge, which would bend nothing
-    (the glTF specification's SimpleSkin strip: two joints, at its base and its middle; the tip pulled 0.7 back
-    from the far edge instead left a last bone 0.15 × the length long). Each part holding SHEET_PART_AREA of the
-    area must be flat itself (two solids far apart are flat as a whole, and a chain through the empty space
-    between them is no skeleton); the chain follows those parts, smaller ones (a button) take their weights from
-    it.
-    """
-    total = sum(p.area for p in parts)
-    deciding = [p.points for p in parts if p.area >= SHEET_PART_AREA * total] or [parts[0].points]
-    if any(flat_normal(points, ratio) is None for points in deciding):
-        return None
-    pts = np.unique(np.concatenate(deciding), axis=0)
-    centre, axes, local = principal_frame(pts)
-    extent = np.ptp(local, axis=0)
-    if extent[0] <= 0 or extent[2] >= ratio * extent[0]:
-        return None
-    segments = int(np.clip(np.floor(extent[0] / max(spacing, extent[1]) + 0.5), 2, max(max_joints, 2)))
-    mid = 0.5 * (local.min(axis=0) + local.max(axis=0))
-    t = local[:, 0].min() + extent[0] * np.arange(segments + 1) / segments
-    chain = centre + (mid[None, :] * [0, 1, 1] + t[:, None] * [1, 0, 0]) @ axes
-    return _from_start(chain)[:-1]
-
-
 def rank_bodies(grid: VoxelGrid, forest: MedialForest) -> tuple[list[int], dict[int, int], np.ndarray]:
     """Medial-forest components by the solid volume (voxels) of the bodies they thin, largest first.
 
@@ -465,7 +317,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
 
     spacing, spur_min = params.spacing * scale, params.spur_min * scale
     plane = body_mirror(v)  # None: not symmetric (then no twins anywhere)
-    ground = _Ground(up, float((v @ up).min()), plane)
+    ground = Ground(up, float((v @ up).min()), plane)
     for _ in range(60):  # widen spacing, then prune longer spurs, then drop small bodies until the budget holds
         forest = MedialForest(base.positions, base.radius, [list(a) for a in base.adjacency], base.component)
         slender = params.twin_slender if spur_min <= params.spur_min * scale else np.inf  # the budget comes first
@@ -488,7 +340,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     degree = np.bincount(np.asarray(graph.edges, dtype=np.int64).ravel(), minlength=len(graph.positions))
     loops = edge_loops(v, params.loop_gap) if len(kept) == 1 and degree.max(initial=0) <= 2 else None
     if loops is not None and len(loops) - 1 <= max_joints:  # a low-poly tube: a joint at each ring but the far one
-        skeleton = _free_skeleton(snap_inside(grid, _from_start(loops)[:-1]), np.arange(-1, len(loops) - 2))
+        skeleton = _free_skeleton(snap_inside(grid, from_start(loops)[:-1]), np.arange(-1, len(loops) - 2))
         return skeleton, {"edge_loops": len(loops), "joints": skeleton.num_joints, "bodies": 1,
                           "resolution": params.resolution, "voxel_pitch": grid.pitch}
     joined = _connect_bodies(graph, list(range(len(kept)))) if len(kept) > 1 else 0

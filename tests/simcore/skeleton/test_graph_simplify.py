@@ -8,7 +8,8 @@ from scipy.spatial import cKDTree
 
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
-from simcore.skeleton.geometric import GeometricParams, _with_limb_root, geometric_skeleton
+from simcore.skeleton.geometric import GeometricParams, geometric_skeleton
+from simcore.skeleton.limb_rules import with_limb_root
 from simcore.skeleton.graph_simplify import limb_exit, prune_spurs
 from simcore.skeleton.mirror import MirrorPlane, mirror_plane
 
@@ -37,20 +38,20 @@ def test_a_limb_gets_a_joint_where_it_leaves_the_body(reverse: bool):
     nodes, adjacency, pos, rad = _limb(reverse)
     params = GeometricParams()  # limb_exit 1.5: the first node with radius <= 0.075 is node 6
     exit_index = nodes.index(6)
-    assert _with_limb_root(nodes, [], adjacency, pos, rad, params, spacing=0.2) == [exit_index]
+    assert with_limb_root(nodes, [], adjacency, pos, rad, params, spacing=0.2) == [exit_index]
     far = nodes.index(15)
-    assert _with_limb_root(nodes, [far], adjacency, pos, rad, params, spacing=0.2) == sorted([exit_index, far])
+    assert with_limb_root(nodes, [far], adjacency, pos, rad, params, spacing=0.2) == sorted([exit_index, far])
 
 
 def test_no_limb_root_next_to_a_joint_near_the_tip_or_off_a_limb():
     nodes, adjacency, pos, rad = _limb()
     params = GeometricParams()
-    assert _with_limb_root(nodes, [7], adjacency, pos, rad, params, spacing=0.2) == [7]  # a joint 0.05 away
-    assert _with_limb_root(nodes, [], adjacency, pos, rad, params, spacing=0.8) == []  # under a spacing left
+    assert with_limb_root(nodes, [7], adjacency, pos, rad, params, spacing=0.2) == [7]  # a joint 0.05 away
+    assert with_limb_root(nodes, [], adjacency, pos, rad, params, spacing=0.8) == []  # under a spacing left
     near_junction = GeometricParams(limb_gap=2.0)  # the junction itself is within 2 × 0.2 of x = 0.3
-    assert _with_limb_root(nodes, [], adjacency, pos, rad, near_junction, spacing=0.2) == []
+    assert with_limb_root(nodes, [], adjacency, pos, rad, near_junction, spacing=0.2) == []
     chain = [[1]] + [[i - 1, i + 1] for i in range(1, 20)] + [[19], [], []]  # leaf to leaf: no junction, no limb
-    assert _with_limb_root(nodes, [], chain, pos, rad, params, spacing=0.2) == []
+    assert with_limb_root(nodes, [], chain, pos, rad, params, spacing=0.2) == []
 
 
 def _finned_trunk(fin_radius: float):
