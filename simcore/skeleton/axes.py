@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
+from typing import get_args
+
 import numpy as np
 
 from simcore.errors import InvalidInput
+from simcore.options import Axis
 
-AXES: dict[str, np.ndarray] = {
-    "x": np.array([1.0, 0, 0]), "-x": np.array([-1.0, 0, 0]), "y": np.array([0, 1.0, 0]),
-    "-y": np.array([0, -1.0, 0]), "z": np.array([0, 0, 1.0]), "-z": np.array([0, 0, -1.0]),
-}
+
+def _unit(name: str) -> np.ndarray:
+    """(3,) the unit vector an option name ("x", "-z", …) stands for."""
+    out = np.zeros(3)
+    out["xyz".index(name[-1])] = -1.0 if name.startswith("-") else 1.0
+    return out
+
+
+AXES: dict[str, np.ndarray] = {name: _unit(name) for name in get_args(Axis)}  # the options' own list
 GLTF_UP = AXES["y"]
 
 

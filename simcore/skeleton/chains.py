@@ -16,10 +16,11 @@ def chain_start(ends: np.ndarray, span: float) -> int:
     return int(low[np.argmin(ends[low, 2])])
 
 
-def from_start(chain: np.ndarray) -> np.ndarray:
-    """The joints `chain` (J, 3) of a chain, in order from the end it is rooted at (`chain_start`)."""
-    span = float(np.ptp(chain, axis=0).max())
-    return chain if chain_start(chain[[0, -1]], span) == 0 else chain[::-1]
+def segment_starts(points: np.ndarray) -> np.ndarray:
+    """The joints of a chain whose segments run between consecutive `points` (K, 3): where each segment starts, in
+    order from the end it is rooted at (`chain_start`), none on the far end (it would bend nothing). (K - 1, 3)."""
+    span = float(np.ptp(points, axis=0).max())
+    return (points if chain_start(points[[0, -1]], span) == 0 else points[::-1])[:-1]
 
 
 def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_joints: int) -> np.ndarray | None:
@@ -47,4 +48,4 @@ def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_join
     mid = 0.5 * (local.min(axis=0) + local.max(axis=0))
     t = local[:, 0].min() + extent[0] * np.arange(segments + 1) / segments
     chain = centre + (mid[None, :] * [0, 1, 1] + t[:, None] * [1, 0, 0]) @ axes
-    return from_start(chain)[:-1]
+    return segment_starts(chain)

@@ -20,7 +20,7 @@ from scipy.sparse.csgraph import dijkstra
 from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.skeleton.axes import GLTF_UP
-from simcore.skeleton.chains import chain_start, from_start, sheet_chain
+from simcore.skeleton.chains import chain_start, segment_starts, sheet_chain
 from simcore.skeleton.edge_loops import edge_loops
 from simcore.skeleton.graph_simplify import branch_joints, branches, merge_junctions, path_length, prune_spurs
 from simcore.skeleton.hub_split import HubSplit, split_hubs
@@ -246,6 +246,11 @@ def _free_skeleton(positions: np.ndarray, parents: np.ndarray) -> Skeleton:
     return Skeleton(positions, parents, names, [JointKind.FREE] * len(positions)).validate()
 
 
+def _chain_skeleton(positions: np.ndarray) -> Skeleton:
+    """`_free_skeleton` of a chain: each of `positions` (J, 3) the parent of the next."""
+    return _free_skeleton(positions, np.arange(-1, len(positions) - 1, dtype=np.int64))
+
+
 def _extend_end(end: np.ndarray, inner: np.ndarray, distance: float) -> np.ndarray:
     """(3,) `end` moved `distance` further along the direction from `inner` to `end`."""
     step = end - inner
@@ -305,10 +310,10 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     """
     v = np.asarray(vertices, dtype=np.float64)
     scale = float(np.ptp(v, axis=0).max()) or 1.0
-    chain = sheet_chain(parts if parts is not None else surface_parts(v, faces), params.sheet_ratio, params.spacing * scale, max_joints)
+    parts = parts if parts is not None else surface_parts(v, faces)
+    chain = sheet_chain(parts, params.sheet_ratio, params.spacing * scale, max_joints)
     if chain is not None:
-        parents = np.arange(-1, len(chain) - 1, dtype=np.int64)
-        skeleton = _free_skeleton(chain, parents)
+        skeleton = _chain_skeleton(chain)
         return skeleton, {"sheet": True, "joints": skeleton.num_joints, "bodies": 1}
     grid, base, closing = _closed_solid(v, faces, params)
     ranked, comp_volume, body_labels = rank_bodies(grid, base)
@@ -340,7 +345,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     degree = np.bincount(np.asarray(graph.edges, dtype=np.int64).ravel(), minlength=len(graph.positions))
     loops = edge_loops(v, params.loop_gap) if len(kept) == 1 and degree.max(initial=0) <= 2 else None
     if loops is not None and len(loops) - 1 <= max_joints:  # a low-poly tube: a joint at each ring but the far one
-        skeleton = _free_skeleton(snap_inside(grid, from_start(loops)[:-1]), np.arange(-1, len(loops) - 2))
+        skeleton = _chain_skeleton(snap_inside(grid, segment_starts(loops)))
         return skeleton, {"edge_loops": len(loops), "joints": skeleton.num_joints, "bodies": 1,
                           "resolution": params.resolution, "voxel_pitch": grid.pitch}
     joined = _connect_bodies(graph, list(range(len(kept)))) if len(kept) > 1 else 0

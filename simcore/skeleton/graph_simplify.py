@@ -61,8 +61,8 @@ def prune_spurs(adjacency: list[list[int]], positions: np.ndarray, radius: np.nd
     removes at most one spur per junction (the shortest), so two real short branches cannot vanish together.
     With the body's mirror `plane`, two spurs of one junction that are each other's mirror image are decided
     together: kept when both are slender (longer than `slender` × their median radius: fins, ears, horns; the
-    default keeps none), else removed together. One at a time, the shorter would go and its twin would stay on as the junction's
-    continuation (a fish with one pectoral fin). Returns the ids of the removed nodes.
+    default keeps none), else removed together. One at a time, the shorter would go and its twin would stay on as
+    the junction's continuation (a fish with one pectoral fin). Returns the ids of the removed nodes.
     """
     removed: list[int] = []
     twins_kept: set[int] = set()  # leaves of slender mirror twins

@@ -24,15 +24,15 @@ from scipy.spatial import cKDTree
 
 from simcore.errors import InvalidInput
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
-from simcore.skeleton.axes import AXES, axis
+from simcore.skeleton.axes import AXES, GLTF_UP, axis
 from simcore.skeleton.extra_limbs import extra_limbs
 from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.graph_simplify import limb_exit, path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.hands import fit_fingers
 from simcore.skeleton.inside import snap_inside
-from simcore.skeleton.section_centre import centre_in_section
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
+from simcore.skeleton.section_centre import centre_in_section
 from simcore.skeleton.symmetry import body_mirror, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
 
@@ -403,7 +403,7 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
     left = np.cross(biped.up, forward)
     report.update(confidence=round(biped.confidence, 3), checks={k: round(x, 3) for k, x in biped.checks.items()},
                   up=_facing_label(biped.up), residual=round(residual, 4))
-    sideways = up_given is None and not np.array_equal(biped.up, AXES["y"])
+    sideways = up_given is None and not np.array_equal(biped.up, GLTF_UP)
     if biped.confidence < (SIDEWAYS_CONFIDENT if sideways else CONFIDENT) and not force:
         if biped.confidence >= CONFIDENT:  # only SIDEWAYS_CONFIDENT refused it
             report["reason"] = f"a biped only when read {_facing_label(biped.up)} up, and not confidently"

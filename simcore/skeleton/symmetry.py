@@ -52,9 +52,9 @@ def mirror_report(twins: MirrorTwins | None, dropped: int = 0, added: int = 0, e
     if twins is None:
         return {"axis": None}
     own = np.arange(len(twins.twin))
-    return {"axis": "xyz"[twins.plane.axis], "pairs": int(np.count_nonzero((twins.twin >= 0) & (twins.twin != own))) // 2,
-            "on_plane": int(np.count_nonzero(twins.twin == own)), "lopsided_dropped": dropped, "twins_added": added,
-            "midline_ends_dropped": ends}
+    pairs = int(np.count_nonzero((twins.twin >= 0) & (twins.twin != own))) // 2
+    return {"axis": "xyz"[twins.plane.axis], "pairs": pairs, "on_plane": int(np.count_nonzero(twins.twin == own)),
+            "lopsided_dropped": dropped, "twins_added": added, "midline_ends_dropped": ends}
 
 
 def body_mirror(vertices: np.ndarray) -> MirrorPlane | None:
@@ -89,8 +89,9 @@ def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, pl
 def _named_pairs(names: list[str]) -> list[tuple[int, int]]:
     """(i, j) index pairs of `Left…`/`Right…` names that differ only in the side."""
     index = {name: i for i, name in enumerate(names)}
-    return [(i, index[name.replace(side, other)]) for name, i in index.items()
-            for side, other in (("Left", "Right"), ("Right", "Left")) if side in name and name.replace(side, other) in index]
+    sides = (("Left", "Right"), ("Right", "Left"))
+    return [(i, index[name.replace(side, other)]) for name, i in index.items() for side, other in sides
+            if side in name and name.replace(side, other) in index]
 
 
 def _solid_size(grid: VoxelGrid) -> float:

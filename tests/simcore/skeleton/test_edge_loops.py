@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 
 from simcore.geometry.capsule_creatures import capsule_between
 from simcore.skeleton.edge_loops import edge_loops
@@ -43,7 +44,7 @@ def test_edge_loops_are_the_ring_centres_in_order():
 @pytest.mark.parametrize(("vertices", "why"), [
     (low_poly_tube(np.linspace(0.0, 2.0, 21), 0.15, axis=1)[0], "rings 0.1 apart, 0.3 thick: fine tessellation"),
     (low_poly_tube(np.array([0.0, 2.0]), 0.15, axis=1)[0], "two rings: a rigid stick, nothing to bend"),
-    (np.vstack([low_poly_tube(LEVELS, 0.15, axis=1)[0], [[0.1, 0.9, 0.0]]]), "a vertex between the rings"),
+    (np.vstack([low_poly_tube(LEVELS, 0.15, axis=1)[0], [[0.1, 0.2, 0.0]]]), "a stray vertex between rings"),
     (low_poly_tube(np.array([0.0, 0.5, 1.0]), 0.45, axis=1)[0], "three rings on a block not twice as long as thick"),
     (low_poly_tube(np.concatenate([np.linspace(0.0, 0.2, 300), np.linspace(0.9, 1.1, 300),
                                    np.linspace(1.8, 2.0, 300)]), 0.15, axis=1)[0],
@@ -64,3 +65,15 @@ def test_a_low_poly_tube_gets_a_joint_at_each_ring_but_the_far_one(axis: int, la
     np.testing.assert_allclose(skeleton.positions, expected, atol=1e-9, err_msg=label)
     assert skeleton.parents.tolist() == list(range(-1, len(LEVELS) - 2)), label
 
+
+
+def test_a_tube_with_an_arm_on_its_rings_is_not_rigged_by_them():
+    # An arm whose box corners lie on two of the post's rings: every vertex is on a ring, but the body branches
+    # (its medial graph has a junction), so it keeps the medial skeleton with a joint in the arm.
+    post, post_faces = low_poly_tube(LEVELS, 0.15, axis=1)
+    arm = trimesh.creation.box(bounds=[[0.0, 0.8, -0.1], [0.6, 1.2, 0.1]])
+    vertices, faces = np.vstack([post, arm.vertices]), np.vstack([post_faces, arm.faces + len(post)])
+    assert edge_loops(vertices, 0.5) is not None  # the rings alone would make it a tube
+    skeleton, report = geometric_skeleton(vertices, faces)
+    assert "edge_loops" not in report
+    assert skeleton.positions[:, 0].max() > 0.3  # a joint out in the arm

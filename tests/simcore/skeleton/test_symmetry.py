@@ -13,9 +13,9 @@ from simcore.io.gltf_rig import read_rigged_asset
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
-from simcore.skeleton.types import Skeleton
 from simcore.skeleton.symmetry import (body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins,
                                       symmetrize)
+from simcore.skeleton.types import Skeleton
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
 
@@ -62,7 +62,8 @@ def _box_creature():
     knee's mirror image falls."""
     positions = np.array([[0, 0, 0], [-0.5, 0, 0], [-1.0, 0, 0], [-1.0, -0.3, 0],
                           [0.5, 0, 0], [1.0, -0.05, 0], [1.0, -0.01, 0]], dtype=np.float64)
-    hump = trimesh.creation.box(extents=(0.4, 0.3, 0.3), transform=trimesh.transformations.translation_matrix([0, 0.6, 0.1]))
+    hump = trimesh.creation.box(extents=(0.4, 0.3, 0.3),
+                                transform=trimesh.transformations.translation_matrix([0, 0.6, 0.1]))
     body = trimesh.util.concatenate([trimesh.creation.box(extents=(2.4, 1.0, 0.4)), hump])  # mirrors across x only
     return positions, np.array([-1, 0, 1, 2, 0, 4, 5]), _solid(body), body.vertices
 
