@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import Skeleton, parents_first_order
 
 
 def bind_matrices(skeleton: Skeleton) -> np.ndarray:
@@ -35,10 +35,12 @@ def compose(rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:
 
 
 def global_transforms(skeleton: Skeleton, local: np.ndarray) -> np.ndarray:
-    """(..., J, 4, 4) world joint transforms from local ones (..., J, 4, 4); parents precede children."""
-    out = np.empty_like(local)
-    for j, p in enumerate(skeleton.parents):
-        out[..., j, :, :] = local[..., j, :, :] if p < 0 else out[..., p, :, :] @ local[..., j, :, :]
+    """(..., J, 4, 4) world joint transforms from local ones (..., J, 4, 4); joints in any order, any roots."""
+    out = np.array(local, copy=True)  # roots keep their local; every other joint is set below
+    for j in parents_first_order(skeleton.parents):
+        p = skeleton.parents[j]
+        if p >= 0:
+            out[..., j, :, :] = out[..., p, :, :] @ local[..., j, :, :]
     return out
 
 

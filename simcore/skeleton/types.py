@@ -10,6 +10,30 @@ import numpy as np
 from simcore.errors import InvalidInput
 
 
+def parents_first_order(parents: np.ndarray) -> np.ndarray:
+    """(J,) int64 permutation listing every joint after its parent; the identity when that already holds (each
+    pass takes, in index order, the joints whose parent is placed). Raises InvalidInput on a cycle or a parent
+    index out of range.
+
+    parents: (J,) int, -1 for a root; any order, any number of roots.
+    """
+    parents = np.asarray(parents, dtype=np.int64).reshape(-1)
+    j = len(parents)
+    if np.any(parents >= j) or np.any(parents < -1):
+        raise InvalidInput("skeleton parent index out of range", field="skeleton")
+    order: list[int] = []
+    placed = np.zeros(j, bool)
+    while len(order) < j:
+        before = len(order)
+        for k in np.flatnonzero(~placed).tolist():
+            if parents[k] < 0 or placed[parents[k]]:
+                order.append(k)
+                placed[k] = True
+        if len(order) == before:
+            raise InvalidInput("skeleton parents form a cycle", field="skeleton")
+    return np.asarray(order, dtype=np.int64)
+
+
 class JointKind(str, Enum):
     """What a joint belongs to; drives tokenisation (template parts, spring chains)."""
 
