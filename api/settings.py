@@ -34,6 +34,7 @@ class Settings(BaseSettings):
     max_upload_mb: float = Field(200.0, gt=0, description="hard cap on one upload request body")
     max_vertices: int = Field(2_000_000, gt=0, description="meshes with more vertices are refused")
     mpm_max_particles: int = Field(30_000, gt=0, description="particle budget of physics refinement per job")
+    max_parallel_parses: int = Field(2, gt=0, description="glTF uploads the API checks at once (each costs a few times its size)")
     host: str = "127.0.0.1"
     port: int = 8000
     jobs: JobSettings = Field(default_factory=JobSettings)

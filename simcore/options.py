@@ -10,7 +10,7 @@ Axis = Literal["x", "y", "z", "-x", "-y", "-z"]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class MotionOptions(_Strict):

@@ -23,10 +23,12 @@ from api.models import Job
 from api.queue import enqueue_job
 from api.settings import get_settings
 from api.storage import LocalStorage
+from simcore.io.json_bounds import JsonTooDeep, loads_bounded
 from simcore.options import JobOptions
 
 router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"])
 SSE_POLL_SECONDS = 0.3
+MAX_OPTIONS_DEPTH = 8  # JobOptions nests 3 deep (refine.bone_stiffness)
 
 
 def parse_options(raw: str | None) -> JobOptions:
@@ -34,9 +36,11 @@ def parse_options(raw: str | None) -> JobOptions:
     if not raw:
         return JobOptions()
     try:
-        data = json.loads(raw)
+        data = loads_bounded(raw, MAX_OPTIONS_DEPTH)
     except json.JSONDecodeError as exc:
         raise Problem(422, "invalid_options", f"options is not valid JSON: {exc.msg} at char {exc.pos}", field="options") from None
+    except JsonTooDeep as exc:
+        raise Problem(422, "invalid_options", f"options is {exc}", field="options") from None
     if not isinstance(data, dict):
         raise Problem(422, "invalid_options", "options must be a JSON object", field="options")
     try:

@@ -9,6 +9,7 @@ import uuid
 from datetime import datetime
 
 from sqlalchemy import or_, select
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from api.jobs.schemas import ArtifactOut, InputFile, JobError, JobOut
@@ -32,25 +33,36 @@ def _asset(session: Session, owner_id: uuid.UUID, stored: StoredFile, filename: 
     return asset
 
 
+def _earlier(session: Session, owner_id: uuid.UUID, idempotency_key: str, digest: str) -> Job | None:
+    """The job an earlier request made with this key; IdempotencyConflict when that request differed."""
+    earlier = session.scalar(select(Job).where(Job.owner_id == owner_id, Job.idempotency_key == idempotency_key))
+    if earlier is not None and earlier.request_hash != digest:
+        raise IdempotencyConflict
+    return earlier
+
+
 def create_job(
     session: Session, *, owner_id: uuid.UUID, mesh: tuple[StoredFile, str, str], motion: tuple[StoredFile, str, str] | None,
     options: JobOptions, idempotency_key: str | None,
 ) -> tuple[Job, bool]:
-    """Record the assets and a queued job; returns (job, created). Same key + same request → the earlier job."""
+    """Record the assets and a queued job; returns (job, created). Same key + same request → the earlier job,
+    also when the two requests race (the loser of the unique constraint answers with the winner's job)."""
     digest = request_hash(mesh[0].sha256, motion[0].sha256 if motion else None, options)
-    if idempotency_key:
-        earlier = session.scalar(select(Job).where(Job.owner_id == owner_id, Job.idempotency_key == idempotency_key))
-        if earlier is not None:
-            if earlier.request_hash != digest:
-                raise IdempotencyConflict
-            return earlier, False
+    if idempotency_key and (earlier := _earlier(session, owner_id, idempotency_key, digest)) is not None:
+        return earlier, False
     mesh_asset = _asset(session, owner_id, *mesh)
     motion_asset = _asset(session, owner_id, *motion) if motion else None
     session.flush()
     job = Job(owner_id=owner_id, options=options.model_dump(mode="json"), mesh_asset_id=mesh_asset.id,
               motion_asset_id=motion_asset.id if motion_asset else None, idempotency_key=idempotency_key, request_hash=digest)
     session.add(job)
-    session.commit()
+    try:
+        session.commit()
+    except IntegrityError:
+        session.rollback()
+        if not idempotency_key or (earlier := _earlier(session, owner_id, idempotency_key, digest)) is None:
+            raise
+        return earlier, False
     return job, True
 
 

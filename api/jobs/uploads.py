@@ -2,13 +2,56 @@
 
 from __future__ import annotations
 
+import threading
+from functools import lru_cache
+from pathlib import Path
+
 from fastapi import UploadFile
 
 from api.errors import Problem
+from api.settings import get_settings
 from api.storage import LocalStorage, StoredFile, UploadTooLarge
 from simcore.errors import SimcoreError
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.sniff import require_kind, sniff
+
+PARSE_WAIT_SECONDS = 5.0
+RETRY_AFTER_SECONDS = 5
+
+
+@lru_cache
+def _parse_slots(count: int) -> threading.BoundedSemaphore:
+    return threading.BoundedSemaphore(count)
+
+
+def upload_format(head: bytes, size: int, *, kind: str, field: str) -> str:
+    """The sniffed format of an upload, checked against `kind` ("mesh" or "motion"). Raises SimcoreError naming `field`."""
+    try:
+        return require_kind(sniff(head, size), kind, field)
+    except SimcoreError as exc:
+        exc.field = field
+        raise
+
+
+def check_structure(path: Path, fmt: str, *, field: str) -> None:
+    """Parse a glTF upload's container and JSON (structure, bounds, no external URIs; Draco is left to the worker).
+
+    At most `max_parallel_parses` run at once, since a big .gltf costs several times its size in memory;
+    a request that finds no free slot within PARSE_WAIT_SECONDS is answered 503 with Retry-After.
+    """
+    if fmt not in ("glb", "gltf"):
+        return
+    slots = _parse_slots(get_settings().max_parallel_parses)
+    if not slots.acquire(timeout=PARSE_WAIT_SECONDS):
+        raise Problem(503, "server_busy", "too many uploads are being checked right now; retry shortly", field=field,
+                      headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
+    try:
+        GltfDocument.from_bytes(path.read_bytes(), decode_draco=False)
+    except SimcoreError as exc:
+        exc.field = field
+        raise
+    finally:
+        slots.release()
 
 
 def store_upload(storage: LocalStorage, upload: UploadFile, *, kind: str, field: str, max_bytes: int) -> tuple[StoredFile, str, str]:
@@ -17,11 +60,6 @@ def store_upload(storage: LocalStorage, upload: UploadFile, *, kind: str, field:
         stored = storage.save_stream(upload.file, max_bytes)
     except UploadTooLarge:
         raise Problem(413, "upload_too_large", f"'{field}' is larger than {max_bytes // (1024 * 1024)} MB", field=field) from None
-    try:
-        fmt = require_kind(sniff(stored.head, stored.size), kind, field)
-        if fmt in ("glb", "gltf"):
-            GltfDocument.from_bytes(stored.path.read_bytes(), decode_draco=False)  # structure, bounds, no external URIs
-    except SimcoreError as exc:
-        exc.field = field
-        raise
+    fmt = upload_format(stored.head, stored.size, kind=kind, field=field)
+    check_structure(stored.path, fmt, field=field)
     return stored, upload.filename or field, fmt

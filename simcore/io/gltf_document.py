@@ -17,6 +17,7 @@ from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput, LimitExceeded, UnsupportedFormat
 from simcore.io.gltf_draco import decompress_draco
+from simcore.io.gltf_schema import node_parents, validate_structure
 
 COMPONENT_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 TYPE_WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
@@ -73,6 +74,8 @@ def _parse_json(raw: bytes) -> dict:
         doc = json.loads(raw.decode("utf-8").rstrip(" \x00"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise _fail(f"glTF JSON does not parse: {exc}") from exc
+    except RecursionError:
+        raise LimitExceeded("the glTF JSON is nested too deeply", code="json_too_deep", field="mesh") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("asset"), dict):
         raise _fail("glTF JSON has no 'asset' object")
     if str(doc["asset"].get("version", "")).split(".")[0] != "2":
@@ -99,28 +102,30 @@ class GltfDocument:
         passes False, so decoding never runs in the API process.
         """
         doc, binary = _split_glb(data) if is_glb(data) else (_parse_json(data), None)
+        required = doc.get("extensionsRequired")
+        unreadable = sorted(UNREADABLE_EXTENSIONS.intersection(required)) if isinstance(required, list) else []
+        if unreadable:
+            raise UnsupportedFormat(f"the file requires {', '.join(unreadable)}, whose compressed geometry RigForge "
+                                    "cannot decode; export it without that compression", field="mesh")
+        validate_structure(doc)
         buffers: list[bytes] = []
         for i, buf in enumerate(doc.get("buffers", [])):
             if "uri" in buf:
-                blob = _decode_data_uri(str(buf["uri"]))
+                blob = _decode_data_uri(buf["uri"])
             elif i == 0 and binary is not None:
                 blob = binary
             else:
                 raise _fail(f"buffer {i} has no data")
-            declared = int(buf.get("byteLength", -1))
-            if declared < 0 or declared > len(blob):
+            declared = buf["byteLength"]
+            if declared > len(blob):
                 raise _fail(f"buffer {i} declares {declared} bytes but holds {len(blob)}")
             buffers.append(blob[:declared])
         for image in doc.get("images", []):
             if "uri" in image:
-                _decode_data_uri(str(image["uri"]))
+                _decode_data_uri(image["uri"])
         document = cls(doc, buffers)
         if decode_draco:
             decompress_draco(document)
-        unreadable = sorted(set(doc.get("extensionsRequired", [])) & UNREADABLE_EXTENSIONS)
-        if unreadable:
-            raise UnsupportedFormat(f"the file requires {', '.join(unreadable)}, whose compressed geometry RigForge "
-                                    "cannot decode; export it without that compression", field="mesh")
         return document
 
     def items(self, key: str) -> list[dict]:
@@ -203,22 +208,8 @@ class GltfDocument:
         return m
 
     def node_parents(self) -> np.ndarray:
-        """(N,) int64 parent node of each node (-1 for scene roots); raises on cycles or shared children."""
-        nodes = self.items("nodes")
-        parents = np.full(len(nodes), -1, dtype=np.int64)
-        for i, node in enumerate(nodes):
-            for c in node.get("children", []):
-                if not isinstance(c, int) or not 0 <= c < len(nodes) or parents[c] >= 0 or c == i:
-                    raise _fail(f"nodes[{i}] has an invalid or shared child {c}")
-                parents[c] = i
-        for i in range(len(nodes)):  # cycle check: walking up must end within N steps
-            seen, p = 0, parents[i]
-            while p >= 0:
-                seen += 1
-                if seen > len(nodes):
-                    raise _fail("node hierarchy has a cycle")
-                p = parents[p]
-        return parents
+        """(N,) int64 parent node of each node (-1 for scene roots); raises on cycles, shared children, depth."""
+        return node_parents(self.items("nodes"))
 
     def world_matrices(self) -> np.ndarray:
         """(N, 4, 4) float64 world transform of every node at its rest (node TRS) pose."""
