@@ -88,10 +88,9 @@ def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray)
     if not any("skin" in n for n in doc.items("nodes")):
         return None
     rig = read_rigged_asset(doc)
-    skin_index = next(int(n["skin"]) for n in doc.items("nodes") if "skin" in n and "mesh" in n)
     world = doc.world_matrices()
     joints_world = conversion @ world[rig.joint_nodes]
-    rest_skin = skin_rest_matrices(doc, skin_index, world)
+    rest_skin = skin_rest_matrices(doc, rig.skin_index, world)[rig.skeleton.file_order]  # in our joint order
     rig_vertices = np.einsum("vj,jab->vab", rig.weights.toarray(), conversion @ rest_skin)
     rig_vertices = np.einsum("vab,vb->va", rig_vertices[:, :3, :3], rig.vertices) + rig_vertices[:, :3, 3]
     dist, index = cKDTree(rig_vertices).query(vertices)
@@ -104,7 +103,7 @@ def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray)
     rot = joints_world[:, :3, :3]
     u, _, vt = np.linalg.svd(rot)
     rig.skeleton = Skeleton(joints_world[:, :3, 3], rig.skeleton.parents, rig.skeleton.names, [],
-                            Rotation.from_matrix(u @ vt).as_quat())
+                            Rotation.from_matrix(u @ vt).as_quat(), rig.skeleton.file_order, rig.skeleton.file_parents)
     rig.vertices = vertices
     rig.bind_matrices = joints_world
     return rig

@@ -5,7 +5,8 @@ The original mesh data (vertex order, indices, normals, UVs, materials, textures
 inverseBindMatrices invert `bind_matrices(skeleton)`, JOINTS_n/WEIGHTS_n on every primitive, and
 optionally a glTF animation (glb_animation) and refinement morph targets (morph_bake).
 Node layout written: mesh nodes first (one per mesh, untransformed scene roots, as glTF wants for
-skinned meshes), then the joints in skeleton order; the scene lists the mesh nodes and the root joint.
+skinned meshes), then the joints in skeleton order (a kept rig's: its upload's order and roots, see file_layout);
+the scene lists the mesh nodes and the root joints.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput
+from simcore.io.file_layout import file_animation, file_skeleton, file_weights
 from simcore.io.glb_packer import ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, GlbBuilder
 from simcore.io.mesh_layout import MeshLayout, read_mesh_layout
 from simcore.io.skin_influences import Influences, top_influences
@@ -132,6 +134,10 @@ def write_rigged_glb(
     if morph_frames is not None and animation is None:
         raise InvalidInput("refined frames need the animation they refine", code="export_shape_mismatch",
                            field="refined_frames")
+    written, order = file_skeleton(skeleton)  # a kept rig goes back in its upload's joint order and roots
+    if animation is not None:
+        animation = file_animation(skeleton, written, animation)
+    skeleton, w = written, file_weights(w, order)
     infl = top_influences(w, max_influences, layout.vertices, skeleton.positions)
 
     source = layout.doc
@@ -149,13 +155,16 @@ def write_rigged_glb(
         nodes.append(node)
     builder.json["nodes"] = nodes
     ibm = np.linalg.inv(bind_matrices(skeleton)).transpose(0, 2, 1).reshape(-1, 16)  # column-major per joint
-    builder.json["skins"] = [{
+    roots = [joint_base + int(r) for r in np.flatnonzero(skeleton.parents < 0)]
+    skin = {
         "name": "skeleton",
         "inverseBindMatrices": builder.add_accessor(ibm.astype(np.float32)),
         "joints": list(range(joint_base, joint_base + skeleton.num_joints)),
-        "skeleton": joint_base,
-    }]
-    builder.json["scenes"] = [{"name": "rigged", "nodes": list(range(mesh_count)) + [joint_base]}]
+    }
+    if len(roots) == 1:  # glTF's skeleton root is a common root of every joint
+        skin["skeleton"] = roots[0]
+    builder.json["skins"] = [skin]
+    builder.json["scenes"] = [{"name": "rigged", "nodes": list(range(mesh_count)) + roots}]
     builder.json["scene"] = 0
 
     stats: dict = {"influences": infl.stats}

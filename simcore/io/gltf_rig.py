@@ -14,7 +14,7 @@ import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
 from simcore.io.gltf_document import GltfDocument
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import Skeleton, parents_first_order
 
 MODES_TRIANGLES = 4
 MODES_TRIANGLE_STRIP = 5
@@ -33,6 +33,8 @@ class RiggedAsset:
     weights:  (V, J) float32 CSR matrix, rows normalised to 1 where any weight exists.
     joint_nodes: (J,) glTF node index of each joint.
     bind_matrices: (J, 4, 4) float64 inverse of each inverse bind matrix (joint's bind transform).
+    skin_index: the glTF skin read.
+    Joints are in the skeleton's order (parents first, one root); skeleton.file_order maps them to the skin's.
     """
 
     vertices: np.ndarray
@@ -41,6 +43,7 @@ class RiggedAsset:
     weights: sp.csr_matrix
     joint_nodes: np.ndarray
     bind_matrices: np.ndarray
+    skin_index: int = 0
 
 
 def primitive_triangles(doc: GltfDocument, prim: dict, vertex_count: int) -> np.ndarray:
@@ -69,7 +72,21 @@ def primitive_triangles(doc: GltfDocument, prim: dict, vertex_count: int) -> np.
     return tri[keep].reshape(-1, 3)
 
 
+def check_finite_weights(weights: np.ndarray, set_index: int) -> None:
+    """Raise InvalidInput (code non_finite_weights) when a WEIGHTS_n accessor holds NaN or infinite values."""
+    bad = ~np.isfinite(weights)
+    if bad.any():
+        raise InvalidInput(f"skin weights WEIGHTS_{set_index} hold {int(bad.any(axis=1).sum())} vertices with NaN or "
+                           "infinite values", code="non_finite_weights", field="mesh")
+
+
 def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.ndarray, np.ndarray]:
+    """(skeleton in our layout, joint nodes and bind matrices in the skin's own `joints` order).
+
+    glTF lets a skin list its joints in any order and have several roots; the skeleton is one tree with
+    parents first: extra roots hang from the root with the most joints under it, and `file_order` /
+    `file_parents` keep the upload's layout for export. skeleton.file_order[i] is joint i's skin slot.
+    """
     skin = doc.items("skins")[skin_index]
     joints = np.asarray(skin.get("joints", []), dtype=np.int64)
     if len(joints) == 0:
@@ -78,6 +95,8 @@ def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.nda
         ibm = doc.accessor(skin["inverseBindMatrices"]).astype(np.float64).reshape(-1, 4, 4).transpose(0, 2, 1)
         if len(ibm) != len(joints):
             raise InvalidInput("inverseBindMatrices count differs from joints", code="invalid_gltf", field="mesh")
+        if not np.all(np.isfinite(ibm)):
+            raise InvalidInput("the skin's inverseBindMatrices hold NaN or infinite values", code="non_finite_bind", field="mesh")
         bind = np.linalg.inv(ibm)
     else:
         bind = doc.world_matrices()[joints]
@@ -90,12 +109,11 @@ def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.nda
             p = int(node_parents[p])
         parents.append(slot[p] if p >= 0 else -1)
     nodes = doc.items("nodes")
-    names = [str(nodes[n].get("name") or f"joint{k}") for k, n in enumerate(joints)]
-    names = _unique(names)
-    skeleton = Skeleton(bind[:, :3, 3], np.asarray(parents), names)
-    if len(np.flatnonzero(skeleton.parents < 0)) > 1:
-        skeleton = _join_roots(skeleton)
-    return skeleton, joints, bind
+    names = _unique([str(nodes[n].get("name") or f"joint{k}") for k, n in enumerate(joints)])
+    file_parents = np.asarray(parents, dtype=np.int64)
+    order = parents_first_order(_join_roots(file_parents))
+    slot_skeleton = Skeleton(bind[:, :3, 3], _join_roots(file_parents), names, [], None, np.arange(len(joints)), file_parents)
+    return slot_skeleton.reordered(order), joints, bind
 
 
 def _unique(names: list[str]) -> list[str]:
@@ -108,12 +126,19 @@ def _unique(names: list[str]) -> list[str]:
     return out
 
 
-def _join_roots(skeleton: Skeleton) -> Skeleton:
-    """Several skin roots: keep them as a forest under the first root (glTF allows forests, our tree does not)."""
-    parents = skeleton.parents.copy()
+def _join_roots(parents: np.ndarray) -> np.ndarray:
+    """Several skin roots (glTF allows a forest, our tree does not): the others hang from the root with the
+    most joints under it (the body, not a prop bone beside it)."""
     roots = np.flatnonzero(parents < 0)
-    parents[roots[1:]] = roots[0]
-    return Skeleton(skeleton.positions, parents, skeleton.names, skeleton.kinds)
+    if len(roots) < 2:
+        return parents
+    top = np.arange(len(parents))
+    for _ in range(len(parents)):  # walk every joint up to its root
+        top = np.where(parents[top] >= 0, parents[top], top)
+    main = roots[int(np.argmax([np.sum(top == r) for r in roots]))]
+    joined = parents.copy()
+    joined[roots[roots != main]] = main
+    return joined
 
 
 def _chosen_skin(doc: GltfDocument, skinned: list[dict]) -> int:
@@ -154,6 +179,7 @@ def _skinned_part(doc: GltfDocument, prim: dict, j: int) -> tuple[np.ndarray, sp
         wi = doc.accessor(attrs[f"WEIGHTS_{s}"]).astype(np.float64)
         if ji.shape != (len(v), 4) or wi.shape != (len(v), 4):
             raise InvalidInput("JOINTS/WEIGHTS must be VEC4 per vertex", code="invalid_gltf", field="mesh")
+        check_finite_weights(wi, s)
         if ji.size and ji.max() >= j:
             raise InvalidInput("JOINTS_n index beyond the skin's joints", code="invalid_gltf", field="mesh")
         keep = wi > 0
@@ -220,7 +246,9 @@ def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
     w = sp.vstack(weights).tocsr()
     sums = np.asarray(w.sum(axis=1)).ravel()
     w = sp.diags(np.where(sums > 0, 1.0 / np.maximum(sums, 1e-12), 0.0)) @ w
-    return RiggedAsset(vertices, np.concatenate(faces), skeleton, w.astype(np.float32).tocsr(), joints, bind)
+    order = skeleton.file_order  # skin slot of each of our joints
+    return RiggedAsset(vertices, np.concatenate(faces), skeleton, w.astype(np.float32).tocsr()[:, order],
+                       joints[order], bind[order], skin_index)
 
 
 def used_joints(skeleton: Skeleton, weights: sp.csr_matrix, eps: float = 1e-6) -> np.ndarray:

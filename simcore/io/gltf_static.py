@@ -12,7 +12,7 @@ import numpy as np
 from simcore.errors import InvalidInput
 from simcore.io.glb_packer import ARRAY_BUFFER, GlbBuilder
 from simcore.io.gltf_document import GltfDocument
-from simcore.io.gltf_rig import MODES_TRIANGLES, TRIANGLE_MODES, primitive_triangles
+from simcore.io.gltf_rig import MODES_TRIANGLES, TRIANGLE_MODES, check_finite_weights, primitive_triangles
 from simcore.io.input_morphs import baked_targets, target_defaults
 
 ELEMENT_ARRAY_BUFFER = 34963
@@ -41,6 +41,7 @@ def _vertex_matrices(doc: GltfDocument, node: dict, prim: dict, node_world: np.n
     while f"JOINTS_{s}" in attrs and f"WEIGHTS_{s}" in attrs:
         ji = doc.accessor(attrs[f"JOINTS_{s}"]).astype(np.int64)
         wi = doc.accessor(attrs[f"WEIGHTS_{s}"]).astype(np.float64)
+        check_finite_weights(wi, s)
         if ji.size and ji.max() >= len(mats):
             raise InvalidInput("JOINTS_n index beyond the skin's joints", code="invalid_gltf", field="mesh")
         blended += np.einsum("vk,vkab->vab", wi, mats[ji])

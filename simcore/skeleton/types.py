@@ -54,6 +54,11 @@ class Skeleton:
     orientations: optional (J, 4) float64 world rotation of each joint frame at bind, quaternion xyzw;
                None means every joint frame is world-axis-aligned (our predicted skeletons). Kept for
                studio rigs re-skinned in "keep" mode so their bind pose survives export.
+    file_order:   optional (J,) int64 position of each joint in the uploaded skin's `joints` list.
+    file_parents: optional (J,) int64 each joint's parent in the upload (an index here, -1 for a root there):
+               it differs from `parents` only at the upload's extra roots, which this tree hangs from its root.
+               Both None for predicted skeletons; kept for studio rigs in "keep" mode so the exported skin
+               lists the joints in the upload's order under the upload's hierarchy.
     """
 
     positions: np.ndarray
@@ -61,6 +66,8 @@ class Skeleton:
     names: list[str]
     kinds: list[JointKind] = field(default_factory=list)
     orientations: np.ndarray | None = None
+    file_order: np.ndarray | None = None
+    file_parents: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.positions = np.asarray(self.positions, dtype=np.float64).reshape(-1, 3)
@@ -71,6 +78,10 @@ class Skeleton:
         self.kinds = [JointKind(k) for k in self.kinds]
         if self.orientations is not None:
             self.orientations = np.asarray(self.orientations, dtype=np.float64).reshape(-1, 4)
+        if self.file_order is not None:
+            self.file_order = np.asarray(self.file_order, dtype=np.int64).reshape(-1)
+        if self.file_parents is not None:
+            self.file_parents = np.asarray(self.file_parents, dtype=np.int64).reshape(-1)
 
     @property
     def num_joints(self) -> int:
@@ -92,6 +103,12 @@ class Skeleton:
             raise InvalidInput("skeleton parents must come before their children (acyclic, ordered)", field="skeleton")
         if len(set(self.names)) != j:
             raise InvalidInput("skeleton joint names are not unique", field="skeleton")
+        if (self.file_order is None) != (self.file_parents is None):
+            raise InvalidInput("skeleton file_order and file_parents come together", field="skeleton")
+        if self.file_order is not None:
+            if sorted(self.file_order.tolist()) != list(range(j)) or self.file_parents.shape != (j,):
+                raise InvalidInput("skeleton file_order is not a permutation of its joints", field="skeleton")
+            parents_first_order(self.file_parents)  # in range and acyclic
         return self
 
     def children(self) -> list[list[int]]:
@@ -114,7 +131,12 @@ class Skeleton:
         inverse[order] = np.arange(len(order))
         parents = np.where(self.parents[order] >= 0, inverse[np.maximum(self.parents[order], 0)], -1)
         orient = None if self.orientations is None else self.orientations[order]
-        return Skeleton(self.positions[order], parents, [self.names[i] for i in order], [self.kinds[i] for i in order], orient)
+        file_order = file_parents = None
+        if self.file_order is not None and self.file_parents is not None:
+            file_order = self.file_order[order]
+            file_parents = np.where(self.file_parents[order] >= 0, inverse[np.maximum(self.file_parents[order], 0)], -1)
+        return Skeleton(self.positions[order], parents, [self.names[i] for i in order], [self.kinds[i] for i in order],
+                        orient, file_order, file_parents)
 
     def without(self, drop: np.ndarray) -> tuple["Skeleton", np.ndarray]:
         """(the tree of the joints not in `drop`, their indices here). drop: (J,) bool, never the root. Each kept
@@ -143,13 +165,17 @@ class Skeleton:
             "positions": self.positions.round(6).tolist(),
             "kinds": [k.value for k in self.kinds],
             "orientations": None if self.orientations is None else self.orientations.round(8).tolist(),
+            "file_order": None if self.file_order is None else self.file_order.tolist(),
+            "file_parents": None if self.file_parents is None else self.file_parents.tolist(),
         }
 
     @classmethod
     def from_dict(cls, data: dict) -> "Skeleton":
         """Inverse of to_dict; validates."""
-        orient = data.get("orientations")
+        orient, file_order, file_parents = (data.get(k) for k in ("orientations", "file_order", "file_parents"))
         return cls(
             np.asarray(data["positions"]), np.asarray(data["parents"]), data["names"], data.get("kinds") or [],
             None if orient is None else np.asarray(orient),
+            None if file_order is None else np.asarray(file_order),
+            None if file_parents is None else np.asarray(file_parents),
         ).validate()
