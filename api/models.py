@@ -5,7 +5,7 @@ from __future__ import annotations
 import uuid
 from datetime import datetime, timezone
 
-from sqlalchemy import JSON, BigInteger, DateTime, Float, ForeignKey, Index, Integer, String, Text, TypeDecorator, UniqueConstraint, Uuid
+from sqlalchemy import JSON, BigInteger, DateTime, Float, ForeignKey, Index, Integer, String, Text, TypeDecorator, UniqueConstraint, Uuid, text
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
 
@@ -83,6 +83,8 @@ class Job(Base):
     finished_at: Mapped[datetime | None] = mapped_column(UTCDateTime, nullable=True)
     error_code: Mapped[str | None] = mapped_column(String(64), nullable=True)
     error_message: Mapped[str | None] = mapped_column(Text, nullable=True)
+    # {code, stage, message, figure, threshold, hard, frame} per quality check or stage notice (simcore.gate)
+    warnings: Mapped[list] = mapped_column(JSON, default=list, server_default=text("'[]'"))
 
     mesh_asset: Mapped[Asset] = relationship(foreign_keys=[mesh_asset_id], lazy="joined")
     motion_asset: Mapped[Asset | None] = relationship(foreign_keys=[motion_asset_id], lazy="joined")

@@ -13,6 +13,7 @@ class SimcoreError(Exception):
         if code is not None:
             self.code = code
         self.field = field
+        self.warnings: list[dict] = []  # the job's warnings up to the failure (set by the pipeline)
 
 
 class InvalidInput(SimcoreError):

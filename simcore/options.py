@@ -58,6 +58,10 @@ class JobOptions(_Strict):
     )
     motion: MotionOptions = Field(default_factory=MotionOptions)
     refine: RefineOptions = Field(default_factory=RefineOptions)
+    quality_gate: Literal["fail", "warn"] = Field(
+        "fail", description="a result past a hard quality threshold fails the job with code quality_gate ('fail') "
+                            "or succeeds with the warning flagged ('warn')",
+    )
     stages: list[Literal["skeleton", "skin", "motion", "refine", "export"]] | None = Field(
         None, description="run only these stages after ingest (default: all; [] = ingest only)"
     )

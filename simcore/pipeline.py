@@ -53,10 +53,14 @@ class PipelineState:
     weights: "sp.csr_matrix | None" = None  # (V, J) float32, rows sum to 1
     animation: "JointAnimation | None" = None
     refined_frames: "np.ndarray | None" = None  # (T, V, 3) float32 simulated vertex positions
+    stage: str = "ingest"  # the stage running now: where warnings come from
 
-    def warn(self, message: str) -> None:
-        """Record a user-facing warning in report.json."""
-        self.report.setdefault("warnings", []).append(message)
+    def warn(self, message: str, *, code: str = "notice", figure: float | None = None,
+             threshold: float | None = None) -> None:
+        """Record a user-facing warning of the current stage (report.json and the job's `warnings`)."""
+        from simcore.gate.warnings import add_warning
+
+        add_warning(self.report, code=code, stage=self.stage, message=message, figure=figure, threshold=threshold)
 
 
 class StageProgress:
@@ -98,7 +102,11 @@ def run_pipeline(
     on_progress: ProgressCallback = lambda stage, fraction: None,
     check_cancel: CancelCheck = lambda: None,
 ) -> PipelineState:
-    """Run every applicable stage, write report.json, return the final state (artifacts in workdir)."""
+    """Run every applicable stage and its quality checks, write report.json, return the final state (artifacts
+    in workdir). A SimcoreError leaves with the warnings recorded so far in its `warnings`."""
+    from simcore.errors import SimcoreError
+    from simcore.gate.checks import check_stage
+
     workdir.mkdir(parents=True, exist_ok=True)
     state = PipelineState(inputs, options, workdir)
     wanted = options.stages
@@ -110,7 +118,13 @@ def run_pipeline(
         check_cancel()
         started = time.perf_counter()
         on_progress(name, done / total)
-        run(state, StageProgress(name, done / total, cost / total, on_progress, check_cancel))
+        state.stage = name
+        try:
+            run(state, StageProgress(name, done / total, cost / total, on_progress, check_cancel))
+            check_stage(name, state)
+        except SimcoreError as exc:
+            exc.warnings = list(state.report.get("warnings", []))
+            raise
         timings[name] = round(time.perf_counter() - started, 3)
         done += cost
     state.report["timings_s"] = timings

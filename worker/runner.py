@@ -89,12 +89,12 @@ def execute(job_id: uuid.UUID, settings: Settings, worker_id: str) -> str:
         heartbeat.stop()
         rows = storage.publish(work, job_id, claim.attempt, sorted(result.artifacts))
         with session_scope() as session:
-            return "succeeded" if state.succeed(session, claim, rows) else "lost"
+            return "succeeded" if state.succeed(session, claim, rows, result.report.get("warnings", [])) else "lost"
     except Canceled:
         storage.discard(work)
         return "canceled"
     except SimcoreError as exc:
-        return _fail(claim, exc.code, str(exc), storage, work)
+        return _fail(claim, exc.code, str(exc), storage, work, exc.warnings)
     except Exception as exc:  # noqa: BLE001 - any other failure is recorded on the job, never lost
         from celery.exceptions import SoftTimeLimitExceeded
 
@@ -106,7 +106,8 @@ def execute(job_id: uuid.UUID, settings: Settings, worker_id: str) -> str:
         heartbeat.stop()
 
 
-def _fail(claim: state.Claim, code: str, message: str, storage: LocalStorage, work: Path) -> str:
+def _fail(claim: state.Claim, code: str, message: str, storage: LocalStorage, work: Path,
+          warnings: list[dict] | None = None) -> str:
     storage.discard(work)
     with session_scope() as session:
-        return "failed" if state.fail(session, claim, code, message) else "lost"
+        return "failed" if state.fail(session, claim, code, message, warnings) else "lost"

@@ -6,7 +6,7 @@ import uuid
 from datetime import datetime
 from typing import Literal
 
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
 JobStatus = Literal["queued", "running", "succeeded", "failed", "canceled"]
 
@@ -14,6 +14,18 @@ JobStatus = Literal["queued", "running", "succeeded", "failed", "canceled"]
 class JobError(BaseModel):
     code: str
     message: str
+
+
+class JobWarning(BaseModel):
+    """A stage notice or a quality check past its threshold (`hard`: past the failing one)."""
+
+    code: str
+    stage: str
+    message: str
+    figure: float | None = None
+    threshold: float | None = None
+    hard: bool = False
+    frame: int | None = Field(None, description="worst animation frame, for checks over a clip")
 
 
 class ArtifactOut(BaseModel):
@@ -44,6 +56,7 @@ class JobOut(BaseModel):
     mesh: InputFile
     motion: InputFile | None
     error: JobError | None
+    warnings: list[JobWarning]
     artifacts: list[ArtifactOut]
 
 

@@ -12,7 +12,7 @@ from sqlalchemy import or_, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from api.jobs.schemas import ArtifactOut, InputFile, JobError, JobOut
+from api.jobs.schemas import ArtifactOut, InputFile, JobError, JobOut, JobWarning
 from api.models import Asset, Job
 from api.storage import StoredFile
 from simcore.options import JobOptions
@@ -107,4 +107,5 @@ def to_schema(job: Job, base_url: str) -> JobOut:
     ]
     return JobOut(id=job.id, status=job.status, stage=job.stage, progress=job.progress, created_at=job.created_at, started_at=job.started_at,
                   finished_at=job.finished_at, options=job.options, attempts=job.attempts, mesh=_input(job.mesh_asset),
-                  motion=_input(job.motion_asset), error=error, artifacts=artifacts)
+                  motion=_input(job.motion_asset), error=error,
+                  warnings=[JobWarning.model_validate(w) for w in job.warnings or []], artifacts=artifacts)

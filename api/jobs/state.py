@@ -42,7 +42,7 @@ def claim(session: Session, job_id: uuid.UUID, worker_id: str, lease_seconds: fl
         update(Job)
         .where(Job.id == job_id, Job.status == "queued", Job.attempts == job.attempts)
         .values(status="running", attempts=attempt, worker_id=worker_id, lease_expires_at=t + timedelta(seconds=lease_seconds),
-                started_at=t, stage="starting", progress=0.0, error_code=None, error_message=None)
+                started_at=t, stage="starting", progress=0.0, error_code=None, error_message=None, warnings=[])
         .execution_options(synchronize_session=False)
     )
     session.commit()
@@ -77,11 +77,12 @@ def report_progress(session: Session, claim_: Claim, stage: str, progress: float
     return result.rowcount == 1
 
 
-def succeed(session: Session, claim_: Claim, artifacts: list[dict]) -> bool:
-    """running → succeeded with its artifact rows, in one transaction. False if this attempt lost the job."""
+def succeed(session: Session, claim_: Claim, artifacts: list[dict], warnings: list[dict] | None = None) -> bool:
+    """running → succeeded with its artifact rows and warnings, in one transaction. False if this attempt lost the job."""
     result = session.execute(
         update(Job).where(*_running(claim_))
-        .values(status="succeeded", stage="done", progress=1.0, finished_at=now(), lease_expires_at=None)
+        .values(status="succeeded", stage="done", progress=1.0, finished_at=now(), lease_expires_at=None,
+                warnings=warnings or [])
         .execution_options(synchronize_session=False)
     )
     if result.rowcount != 1:
@@ -92,11 +93,12 @@ def succeed(session: Session, claim_: Claim, artifacts: list[dict]) -> bool:
     return True
 
 
-def fail(session: Session, claim_: Claim, code: str, message: str) -> bool:
-    """running → failed with a stable code and a human message."""
+def fail(session: Session, claim_: Claim, code: str, message: str, warnings: list[dict] | None = None) -> bool:
+    """running → failed with a stable code, a human message and the warnings recorded up to the failure."""
     result = session.execute(
         update(Job).where(*_running(claim_))
-        .values(status="failed", finished_at=now(), lease_expires_at=None, error_code=code, error_message=message[:4000])
+        .values(status="failed", finished_at=now(), lease_expires_at=None, error_code=code, error_message=message[:4000],
+                warnings=warnings or [])
         .execution_options(synchronize_session=False)
     )
     session.commit()

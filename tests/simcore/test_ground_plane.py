@@ -81,7 +81,7 @@ def test_a_character_on_a_floor_is_still_rigged_as_a_humanoid(figure: trimesh.Tr
     assert state.skeleton is not None and state.weights is not None and state.mesh is not None
     assert state.report["skeleton"]["method"] == "humanoid"  # the floor made it a 2-body geometric skeleton before
     assert state.report["skeleton"]["ground_triangles"] == 2
-    assert any("ground plane" in w for w in state.report["warnings"])
+    assert any("ground plane" in w["message"] for w in state.report["warnings"])
     floor_rows = np.flatnonzero(np.isin(np.round(state.mesh.vertices, 6), np.round(floor.vertices, 6)).all(axis=1))
     assert len(floor_rows) == 4
     weights = state.weights.toarray()

@@ -55,7 +55,7 @@ def test_missing_validator_is_a_warning(tmp_path, monkeypatch):
     monkeypatch.setenv("RIGFORGE_GLTF_VALIDATOR", str(tmp_path / "nowhere"))
     export_stage.run(state, _progress([]))
     assert "skipped" in state.report["validation"]["rigged.glb"]
-    assert any("not validated" in w for w in state.report["warnings"])
+    assert any("not validated" in w["message"] for w in state.report["warnings"])
     assert state.report["validation"]["rigged.usdc"]["errors"] == 0
 
 

@@ -68,7 +68,7 @@ def test_excluded_joints_get_no_weight_and_keep_their_column(tmp_path: Path) -> 
     assert state.weights.shape[1] == ik + 1 and state.weights[:, ik].sum() == 0.0
     np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
     assert state.report["skinning"]["excluded_joints"] == ["Foot_IK"]
-    assert state.report["warnings"] == ["options.exclude_joints pattern 'nothing*' matches no joint"]
+    assert [w["message"] for w in state.report["warnings"]] == ["options.exclude_joints pattern 'nothing*' matches no joint"]
 
 
 def test_the_root_cannot_be_excluded(tmp_path: Path) -> None:
