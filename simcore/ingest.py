@@ -147,8 +147,18 @@ def ingest(data: bytes, fmt: str, *, up_axis: str | None = None, units: str = "a
     rig = _source_rig(doc, conversion, vertices) if doc is not None else None
     if rig is not None:
         stats["input_skeleton_joints"] = rig.skeleton.num_joints
+    if doc is not None and doc.dropped_images:
+        stats["external_images_dropped"] = list(doc.dropped_images)
     stats["warnings"] = warnings
     return IngestedMesh(vertices, faces, glb, UNIT_SCALE[unit], rig, doc, stats)
+
+
+def _dropped_images_message(uris: list[str]) -> str:
+    """The warning for texture images that pointed at files outside the upload."""
+    shown = ", ".join(repr(u[:80]) for u in uris[:3]) + (f" and {len(uris) - 3} more" if len(uris) > 3 else "")
+    return (f"{len(uris)} texture image(s) point at files outside the upload and were left out unread ({shown}); "
+            "the mesh is rigged without them. Upload a GLB with embedded textures, or a .zip of the .gltf with its "
+            ".bin and images, to keep them")
 
 
 def run(state: PipelineState, progress: StageProgress) -> None:
@@ -165,5 +175,8 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     stats = dict(state.mesh.stats)
     for w in stats.pop("warnings", []):
         state.warn(w)
+    dropped = stats.get("external_images_dropped", [])
+    if dropped:
+        state.warn(_dropped_images_message(dropped), code="external_images_dropped", figure=len(dropped))
     state.report["mesh"] = stats
     progress(1.0)

@@ -1,7 +1,8 @@
 """Strict glTF 2.0 container reader: GLB or embedded-buffer .gltf bytes → JSON + buffers + typed accessors.
 
-Never follows a URI outside the upload: only the GLB BIN chunk and `data:` URIs are accepted. Every
-accessor read is bounds-checked against its buffer view and buffer, so a lying file raises InvalidInput
+Never follows a URI outside the upload: only the GLB BIN chunk and `data:` URIs are accepted for buffers;
+images with any other URI are dropped unread (gltf_images), so the mesh goes through without those textures.
+Every accessor read is bounds-checked against its buffer view and buffer, so a lying file raises InvalidInput
 instead of reading garbage. This is "our own reader"; pygltflib and trimesh are the independent ones.
 """
 
@@ -17,6 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput, LimitExceeded, UnsupportedFormat
 from simcore.io.gltf_draco import decompress_draco
+from simcore.io.gltf_images import drop_external_images
 from simcore.io.gltf_schema import node_parents, validate_structure
 
 COMPONENT_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
@@ -93,6 +95,7 @@ class GltfDocument:
 
     json: dict
     buffers: list[bytes] = field(default_factory=list)
+    dropped_images: list[str] = field(default_factory=list)  # external image URIs removed unread (gltf_images)
 
     @classmethod
     def from_bytes(cls, data: bytes, *, decode_draco: bool = True) -> "GltfDocument":
@@ -120,10 +123,11 @@ class GltfDocument:
             if declared > len(blob):
                 raise _fail(f"buffer {i} declares {declared} bytes but holds {len(blob)}")
             buffers.append(blob[:declared])
+        dropped = drop_external_images(doc)
         for image in doc.get("images", []):
             if "uri" in image:
                 _decode_data_uri(image["uri"])
-        document = cls(doc, buffers)
+        document = cls(doc, buffers, dropped)
         if decode_draco:
             decompress_draco(document)
         return document
