@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
 
 
 @contextmanager
@@ -17,5 +18,25 @@ def stage_bar(title: str) -> Iterator:
 
         def update(stage: str, fraction: float) -> None:
             bar.update(task, completed=fraction, stage=stage)
+
+        yield update
+
+
+@contextmanager
+def count_bar(title: str) -> Iterator:
+    """Yields update(note, done, total): a bar on a terminal, else one plain line per update (CI logs, files)."""
+    console = Console()
+    if not console.is_terminal:
+        def line(note: str, done: int, total: int) -> None:
+            print(f"{title} {done}/{total} {note}", flush=True)
+
+        yield line
+        return
+    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[note]}"),
+                  TimeElapsedColumn(), transient=False, console=console) as bar:
+        task = bar.add_task(title, total=None, note="")
+
+        def update(note: str, done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total, note=note)
 
         yield update

@@ -26,8 +26,23 @@ def read_categories(directory: Path) -> dict[str, str]:
     return out
 
 
-def rigged_assets(directory: Path, skipped: dict[str, str] | None = None) -> Iterator[tuple[str, str, GltfDocument, RiggedAsset]]:
-    """(name, category, document, rigged asset) for each readable skinned .glb/.gltf in `directory`, by name.
+def split_files(directory: Path, split: str) -> list[Path]:
+    """The files MANIFEST.tsv (`file` and `split` columns, the training corpus layout) lists for `split`."""
+    manifest = Path(directory) / "MANIFEST.tsv"
+    if not manifest.is_file():
+        raise InvalidInput(f"{directory} has no MANIFEST.tsv to read split {split!r} from", code="no_manifest", field="split")
+    with manifest.open(newline="", encoding="utf-8") as fh:
+        rows = [r for r in csv.DictReader(fh, delimiter="\t") if (r.get("split") or "").strip() == split and r.get("file")]
+    if not rows:
+        raise InvalidInput(f"MANIFEST.tsv in {directory} lists no file in split {split!r}", code="empty_split", field="split")
+    return sorted(Path(directory) / r["file"].strip() for r in rows)
+
+
+def rigged_assets(
+    directory: Path, skipped: dict[str, str] | None = None, split: str | None = None
+) -> Iterator[tuple[str, str, GltfDocument, RiggedAsset]]:
+    """(name, category, document, rigged asset) for each readable skinned .glb/.gltf in `directory`, by name
+    (with `split`, the files MANIFEST.tsv lists for that split, wherever they lie below `directory`).
 
     Files that do not read as a rig (no skin, malformed) go to `skipped` as name → "code: message".
     """
@@ -35,7 +50,8 @@ def rigged_assets(directory: Path, skipped: dict[str, str] | None = None) -> Ite
     if not directory.is_dir():
         raise InvalidInput(f"{directory} is not a directory", code="not_a_directory", field="dir")
     categories = read_categories(directory)
-    for path in sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf")):
+    files = split_files(directory, split) if split else sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf"))
+    for path in files:
         try:
             doc = GltfDocument.from_bytes(path.read_bytes())
             asset = read_rigged_asset(doc)

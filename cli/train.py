@@ -1,0 +1,64 @@
+"""`rigforge train data|skin --config CONFIG`: build the learned skinning model's samples, then train it.
+
+CONFIG is a JSON file (simcore/training/configs/skin_cpu.json is the shipped model's): "cache" (sample folder),
+"out" (.safetensors), "log" (JSON lines), "data" (DataConfig) and "train" (TrainConfig) sections. Needs the
+`train` extra (`pip install -e '.[train]'`) for the anny bodies.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from cli.progress import count_bar
+
+app = typer.Typer(help="Train the learned models.", no_args_is_help=True)
+DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "simcore" / "training" / "configs" / "skin_cpu.json"
+ConfigOption = Annotated[Path, typer.Option("--config", exists=True, dir_okay=False, help="JSON training config")]
+
+
+def _read(config: Path) -> dict:
+    return json.loads(config.read_text(encoding="utf-8"))
+
+
+@app.command("data")
+def data(config: ConfigOption = DEFAULT_CONFIG) -> None:
+    """Build (or complete) the sample cache: corpus train/val characters, augmented, and anny bodies."""
+    from simcore.training.skin_dataset import DataConfig, build_skin_data  # torch and anny load only for training
+
+    spec = _read(config)
+    with count_bar("samples") as update:
+        summary = build_skin_data(DataConfig(**spec.get("data", {})), Path(spec["cache"]), lambda name, done, total: update(name, done, total))
+    Console().print(f"train samples {summary['train']}, val samples {summary['val']}, failed characters {summary['failed']}")
+    for name, why in summary["skipped"].items():
+        Console().print(f"[yellow]skipped[/] {name}: {why}")
+
+
+@app.command("skin")
+def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
+    """Train the skinning model on the cache, keep the best `val` state, write the .safetensors."""
+    from simcore.skinning.attention_model import ModelConfig
+    from simcore.training.skin_train import TrainConfig, train_skin
+
+    spec = _read(config)
+    section = dict(spec.get("train", {}))
+    section["model"] = ModelConfig(**section.get("model", {}))
+    train_config = TrainConfig(**section)
+    log = Path(spec["log"])
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with count_bar("training") as update:
+        summary = train_skin(train_config, Path(spec["cache"]), Path(spec["out"]), log,
+                             lambda step, total, entry: update(_describe(entry), step, total))
+    Console().print(f"best val L1 {summary['val']['l1']:.4f}, deformation {summary['val']['deform']:.5f} at step "
+                    f"{summary['best_step']} (start {summary['val_at_start']['l1']:.4f}); {summary['seconds']:.0f} s → {spec['out']}")
+
+
+def _describe(entry: dict) -> str:
+    parts = [f"loss {entry['loss']:.4f}"] if "loss" in entry else []
+    if "val" in entry:
+        parts.append(f"val L1 {entry['val']['l1']:.4f}")
+    return ", ".join(parts)

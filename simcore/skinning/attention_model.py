@@ -1,0 +1,72 @@
+"""The learned skinning network: bone–point cross-attention over each vertex's candidate bones (UniRig §skinning).
+
+Bones first exchange context through a few self-attention layers (siblings, chains, the tree's extent). Each
+vertex-bone pair is embedded from its pair features, the bone's embedding and the vertex's; the vertex then
+attends over its candidate pairs (query: the vertex, keys and values: the pairs) and every pair's logit is
+read from its embedding and that context. The geodesic method's log-weights are added to the logits with a
+learned scale, and the output layer starts at zero: an untrained model reproduces geodesic voxel binding, and
+training learns the residual. Softmax over the candidates gives rows that sum to 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import torch
+from torch import nn
+
+from simcore.skinning.pair_features import BONE_FEATURES, PAIR_FEATURES, POINT_FEATURES
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """Network sizes (stored beside the weights)."""
+
+    width: int = 64
+    heads: int = 4
+    bone_layers: int = 2
+
+    def to_dict(self) -> dict[str, int]:
+        return asdict(self)
+
+
+def _mlp(inputs: int, width: int, outputs: int) -> nn.Sequential:
+    return nn.Sequential(nn.Linear(inputs, width), nn.GELU(), nn.Linear(width, outputs))
+
+
+class SkinAttention(nn.Module):
+    """(pair (V, K, P), bone (J, B), point (V, Q), candidates (V, K), prior (V, K)) → (V, K) weights (softmax)."""
+
+    def __init__(self, config: ModelConfig = ModelConfig()):
+        super().__init__()
+        w = config.width
+        self.config = config
+        self.bone_in = nn.Linear(BONE_FEATURES, w)
+        layer = nn.TransformerEncoderLayer(w, config.heads, dim_feedforward=2 * w, dropout=0.0, batch_first=True, norm_first=True)
+        self.bone_context = nn.TransformerEncoder(layer, config.bone_layers, enable_nested_tensor=False)
+        self.point_in = _mlp(POINT_FEATURES, w, w)
+        self.pair_in = _mlp(PAIR_FEATURES + 2 * w, w, w)
+        self.cross = nn.MultiheadAttention(w, config.heads, batch_first=True)
+        self.norm = nn.LayerNorm(w)
+        self.out = _mlp(2 * w, w, 1)
+        nn.init.zeros_(self.out[2].weight)
+        nn.init.zeros_(self.out[2].bias)
+        self.prior_scale = nn.Parameter(torch.ones(()))
+
+    def bones(self, bone: torch.Tensor) -> torch.Tensor:
+        """(J, B) → (J, width) bone embeddings with tree context."""
+        return self.bone_context(self.bone_in(bone)[None])[0]
+
+    def logits(self, pair: torch.Tensor, bones: torch.Tensor, point: torch.Tensor, candidates: torch.Tensor,
+               prior: torch.Tensor) -> torch.Tensor:
+        """(V, K) logits for a chunk of vertices given the bone embeddings of the whole skeleton."""
+        p = self.point_in(point)  # (V, w)
+        k = candidates.shape[1]
+        h = self.pair_in(torch.cat([pair, bones[candidates], p[:, None, :].expand(-1, k, -1)], dim=-1))  # (V, K, w)
+        context, _ = self.cross(p[:, None, :], h, h, need_weights=False)  # (V, 1, w)
+        z = self.norm(h + context)
+        return self.out(torch.cat([z, context.expand(-1, k, -1)], dim=-1))[..., 0] + self.prior_scale * prior
+
+    def forward(self, pair: torch.Tensor, bone: torch.Tensor, point: torch.Tensor, candidates: torch.Tensor,
+                prior: torch.Tensor) -> torch.Tensor:
+        return torch.softmax(self.logits(pair, self.bones(bone), point, candidates, prior), dim=-1)
