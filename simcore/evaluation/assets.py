@@ -11,6 +11,12 @@ from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
 
 
+def problem(exc: Exception) -> str:
+    """One line naming what went wrong: "code: message" for our errors, "ExceptionType: message" otherwise."""
+    kind = exc.code if isinstance(exc, SimcoreError) else type(exc).__name__
+    return f"{kind}: {exc}"[:300]
+
+
 def read_categories(directory: Path) -> dict[str, str]:
     """Asset name (and file stem) → category from DIR/MANIFEST.tsv (`name`, `file`, `category` columns); {} without one."""
     manifest = Path(directory) / "MANIFEST.tsv"
@@ -55,8 +61,8 @@ def rigged_assets(
         try:
             doc = GltfDocument.from_bytes(path.read_bytes())
             asset = read_rigged_asset(doc)
-        except SimcoreError as exc:
+        except Exception as exc:  # one unreadable file must not hide the others; the reason is reported
             if skipped is not None:
-                skipped[path.stem] = f"{exc.code}: {exc}"
+                skipped[path.stem] = problem(exc)
             continue
         yield path.stem, categories.get(path.stem, "unknown"), doc, asset

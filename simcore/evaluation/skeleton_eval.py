@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from simcore.errors import InvalidInput, SimcoreError
-from simcore.evaluation.assets import read_categories, rigged_assets
+from simcore.evaluation.assets import problem, read_categories, rigged_assets
 from simcore.evaluation.voxel_baseline import voxel_skeleton_graph
 from simcore.geometry.voxelize import solid_voxels
 from simcore.io.gltf_rig import RiggedAsset
@@ -160,6 +160,12 @@ def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int 
     for name, category, _, asset in rigged_assets(directory, report.skipped):
         if on_asset is not None:
             on_asset(name)
-        report.tokens[name] = _token_counts(asset, ground_truth_skeleton(asset))
-        report.results.extend(evaluate_asset(name, category, asset, methods, max_joints))
+        try:
+            tokens = _token_counts(asset, ground_truth_skeleton(asset))
+            rows = evaluate_asset(name, category, asset, methods, max_joints)
+        except Exception as exc:  # an asset whose ground truth cannot be built is listed; the others still run
+            report.skipped[name] = problem(exc)
+            continue
+        report.tokens[name] = tokens
+        report.results.extend(rows)
     return report

@@ -106,12 +106,12 @@ def clip_skin_matrices(doc: GltfDocument, asset: RiggedAsset) -> np.ndarray | No
     to_cube[:3, 3] = -centre / side
     frames = []
     for index in range(len(anims)):
-        try:
+        try:  # a clip with broken keys (no keys, NaN or infinite times or values) is left out
             t0, t1, _ = clip_time_range(doc, index)
+            times = np.arange(t0, t1 + 1e-9, 1.0 / CLIP_FPS)[:CLIP_FRAMES]
+            world = sample_node_worlds(doc, index, times, asset.joint_nodes)  # (T, J, 4, 4)
         except SimcoreError:
             continue
-        times = np.arange(t0, t1 + 1e-9, 1.0 / CLIP_FPS)[:CLIP_FRAMES]
-        world = sample_node_worlds(doc, index, times, asset.joint_nodes)  # (T, J, 4, 4)
         frames.append(to_cube @ placement_inv @ world @ ibm @ np.linalg.inv(to_cube))
     return np.concatenate(frames) if frames else None
 

@@ -133,6 +133,8 @@ def sample_node_worlds(doc: GltfDocument, anim_index: int, times: np.ndarray, no
         sampler = samplers[sampler_index]
         key_times = doc.accessor(sampler["input"]).reshape(-1)
         values = doc.accessor(sampler["output"]).astype(np.float64)
+        if not (np.all(np.isfinite(key_times)) and np.all(np.isfinite(values))):
+            raise _non_finite(doc, anim_index, f"times or {path} values of node {n}")
         trs[n][PATHS.index(path)] = sample_track(
             key_times, values, times, sampler.get("interpolation", "LINEAR"), rotation=path == "rotation"
         )
@@ -158,12 +160,22 @@ def _depth(parents: np.ndarray, n: int) -> int:
     return d
 
 
+def _non_finite(doc: GltfDocument, anim_index: int, what: str) -> InvalidInput:
+    """The error refusing a clip whose keyframes hold NaN or infinite numbers."""
+    name = doc.items("animations")[anim_index].get("name") or f"#{anim_index}"
+    return InvalidInput(f"animation {name!r} has NaN or infinite keyframe {what}; the clip is refused",
+                        code="non_finite_keyframes", field="motion")
+
+
 def clip_time_range(doc: GltfDocument, anim_index: int) -> tuple[float, float, list[np.ndarray]]:
     """(first key time, last key time, every sampler's key times) of one animation."""
     anim = doc.items("animations")[anim_index]
     times = [doc.accessor(s["input"]).reshape(-1).astype(np.float64) for s in anim.get("samplers", [])]
     if not times or not any(len(k) for k in times):
         raise InvalidInput("animation has no keyframes", code="invalid_gltf", field="motion")
+    bad = [k for k, t in enumerate(times) if not np.all(np.isfinite(t))]
+    if bad:
+        raise _non_finite(doc, anim_index, f"key times of sampler(s) {bad[:5]}")
     return float(min(k.min() for k in times if len(k))), float(max(k.max() for k in times if len(k))), times
 
 

@@ -132,3 +132,15 @@ def to_glb(doc: dict) -> bytes:
     blob += b"\0" * (-len(blob) % 4)
     chunks = struct.pack("<I4s", len(body), b"JSON") + body + struct.pack("<I4s", len(blob), b"BIN\0") + blob
     return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
+
+
+def with_accessor_values(doc: dict, accessor: int, edit) -> dict:
+    """A copy of `doc` (from studio_rig) whose float32 accessor `accessor` is passed through `edit(array)`."""
+    doc = json.loads(json.dumps(doc))
+    blob = bytearray(base64.b64decode(doc["buffers"][0]["uri"].split(",", 1)[1]))
+    view = doc["bufferViews"][doc["accessors"][accessor]["bufferView"]]
+    start, end = view["byteOffset"], view["byteOffset"] + view["byteLength"]
+    values = np.frombuffer(bytes(blob[start:end]), np.float32).copy()
+    blob[start:end] = np.asarray(edit(values), np.float32).tobytes()
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(bytes(blob)).decode()
+    return doc
