@@ -18,7 +18,6 @@ from rich.table import Table
 from simcore.evaluation.skin_eval import OUR_METHODS, SkinEvaluation, evaluate_skinning
 
 DEFAULT_PEERS = Path("bench/results/peers")
-FOUR = {"cesium_man", "fox", "rigged_figure", "rignet_17364_humanoid_a"}  # the issue's target subset
 
 
 def _fmt(value: float | None, digits: int) -> str:
@@ -39,7 +38,7 @@ def _cells(metrics: dict) -> list[str]:
 
 
 def render(report: SkinEvaluation, console: Console) -> None:
-    """Each asset's methods on consecutive rows (ours beside Blender's), then per-method means (all, the four)."""
+    """Each asset's methods on consecutive rows (ours beside Blender's), then per-method means (all, then per category)."""
     table = Table(title="Skin-only on the assets' own skeletons; deformation in unit-cube units (random poses | own clips)")
     for head in ("asset", "category", "method"):
         table.add_column(head)
@@ -53,24 +52,28 @@ def render(report: SkinEvaluation, console: Console) -> None:
             label = r.method + (f" → {r.chosen}" if r.chosen else "")
             cells = ["error"] + [""] * 7 if r.error else _cells(r.metrics)
             table.add_row(name if first else "", r.category if first else "", label, *cells, end_section=i == len(rows) - 1)
-    for title, subset in (("MEAN (all)", None), ("MEAN (four)", FOUR)):
-        for m in report.methods():
-            table.add_row(title, "", m, *_cells(report.mean(m, subset)), style="bold")
+    categories = sorted({r.category for r in report.rows})
+    subsets = [("MEAN (all)", None)] + [(f"MEAN ({c})", {r.name for r in report.rows if r.category == c}) for c in categories]
+    for title, subset in subsets:
+        for i, m in enumerate(report.methods()):
+            table.add_row(title if i == 0 else "", "", m, *_cells(report.mean(m, subset)), style="bold",
+                          end_section=i == len(report.methods()) - 1)
     print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.method}: {r.error}" for r in report.rows if r.error))
 
 
 def eval_skin(
     directory: Annotated[Path, typer.Argument(exists=True, file_okay=False, help="folder of rigged .glb/.gltf (MANIFEST.tsv optional)")],
-    method: Annotated[str, typer.Option(help="auto, geodesic, heat or all")] = "auto",
+    method: Annotated[str, typer.Option(help="auto, learned, geodesic, heat, or all (every method but auto)")] = "auto",
     peers: Annotated[Path, typer.Option(help="folder of peer weights: PEERS/<peer>/<asset>.npz")] = DEFAULT_PEERS,
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
     pipeline: Annotated[bool, typer.Option(help="add full-pipeline rows: our skeleton + our weights vs the artist's rig")] = False,
+    split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
-    methods = list(OUR_METHODS) if method == "all" else [method]
+    methods = [m for m in OUR_METHODS if m != "auto"] if method == "all" else [method]
     console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:
-        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, on_asset=lambda n: status.update(f"skinning {n}"))
+        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split, on_asset=lambda n: status.update(f"skinning {n}"))
     render(report, console)
     write_report_json(console, json_path, report.to_dict())
 

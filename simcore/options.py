@@ -48,7 +48,7 @@ class JobOptions(_Strict):
     up_axis: Axis | None = Field(None, description="override the input's up axis (glTF input is +Y up)")
     forward_axis: Axis | None = Field(None, description="override the facing direction used by the humanoid fit")
     units: Literal["auto", "m", "cm", "mm", "in"] = "auto"
-    skinning: Literal["auto", "geodesic", "heat"] = "auto"
+    skinning: Literal["auto", "learned", "geodesic", "heat"] = "auto"
     max_influences: Literal[4, 8] = 4
     smooth_iterations: int = Field(2, ge=0, le=50)
     exclude_joints: list[Annotated[str, Field(min_length=1, max_length=200)]] = Field(

@@ -32,7 +32,7 @@ from simcore.skinning.bones import closest_on_segments, joint_segments
 from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
 from simcore.skinning.predict import compute_weights
 
-OUR_METHODS = ("auto", "geodesic", "heat")
+OUR_METHODS = ("auto", "learned", "geodesic", "heat")
 CLIP_FPS = 10.0
 CLIP_FRAMES = 60
 ROW_KEYS = ("l1", "precision", "recall", "deform_mean", "deform_p95", "clip_deform_mean", "clip_deform_p95", "seconds")
@@ -176,15 +176,17 @@ def evaluate_skinning(
     *,
     peers: Path | None = None,
     pipeline: bool = False,
+    split: str | None = None,
     on_asset: Callable[[str], None] | None = None,
 ) -> SkinEvaluation:
     """Skin every rigged asset in `directory` with each of our `methods`; score peers found under `peers`;
-    with `pipeline`, add full-pipeline rows (our skeleton and weights vs the artist's rig)."""
+    with `pipeline`, add full-pipeline rows (our skeleton and weights vs the artist's rig); with `split`, only the
+    files `directory`/MANIFEST.tsv lists for that split (the corpus layout)."""
     for m in methods:
         if m not in OUR_METHODS:
             raise InvalidInput(f"unknown skinning method {m!r}; use {', '.join(OUR_METHODS)} or all", code="invalid_option", field="method")
     report = SkinEvaluation()
-    for name, category, doc, asset in rigged_assets(directory, report.skipped):
+    for name, category, doc, asset in rigged_assets(directory, report.skipped, split=split):
         if on_asset is not None:
             on_asset(name)
         try:

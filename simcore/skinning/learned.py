@@ -41,18 +41,35 @@ def save_model(model: SkinAttention, path: Path, summary: dict) -> None:
 
 
 @lru_cache(maxsize=4)
-def load_model(path: Path = WEIGHTS) -> SkinAttention:
-    """The model stored at `path`, in eval mode (cached per process)."""
+def read_metadata(path: Path = WEIGHTS) -> dict[str, dict]:
+    """The file's JSON metadata: "model" (network sizes) and "summary" (training and val figures)."""
     if not path.is_file():
         raise ModelUnavailable(f"learned skinning weights not found at {path}")
     try:
         with safe_open(str(path), framework="pt") as fh:
             meta = fh.metadata() or {}
-        config = ModelConfig(**json.loads(meta["model"]))
-        model = SkinAttention(config)
-        model.load_state_dict(load_file(str(path)))
-    except (SafetensorError, OSError, KeyError, TypeError, ValueError, RuntimeError) as exc:
+        return {key: json.loads(meta[key]) for key in ("model", "summary")}
+    except (SafetensorError, OSError, KeyError, ValueError) as exc:
         raise ModelUnavailable(f"learned skinning weights at {path} are unreadable: {type(exc).__name__}: {exc}"[:300]) from exc
+
+
+def learned_summary(path: Path = WEIGHTS) -> str:
+    """One line for reports: why `auto` takes the learned model (its val figures beside the geodesic prior's)."""
+    summary = read_metadata(path)["summary"]
+    val, start = summary["val"], summary["val_at_start"]
+    return (f"learned model: corpus val L1 {val['l1']:.3f} vs {start['l1']:.3f} for the geodesic prior it refines, "
+            f"deformation {val['deform']:.4f} vs {start['deform']:.4f}")
+
+
+@lru_cache(maxsize=4)
+def load_model(path: Path = WEIGHTS) -> SkinAttention:
+    """The model stored at `path`, in eval mode (cached per process)."""
+    sizes = read_metadata(path)["model"]
+    try:
+        model = SkinAttention(ModelConfig(**sizes))
+        model.load_state_dict(load_file(str(path)))
+    except (SafetensorError, OSError, RuntimeError, TypeError) as exc:
+        raise ModelUnavailable(f"learned skinning weights at {path} do not fit the model: {type(exc).__name__}: {exc}"[:300]) from exc
     model.eval()
     return model
 

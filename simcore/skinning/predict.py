@@ -21,14 +21,17 @@ from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
+from simcore.skinning.learned import ModelUnavailable, learned_summary, learned_weights
 from simcore.skinning.postprocess import smooth_on_surface, top_k
 from simcore.skinning.quality import quality_scores
 
-Method = Literal["auto", "geodesic", "heat"]
+Method = Literal["auto", "learned", "geodesic", "heat"]
 METHODS: dict[str, Callable[..., np.ndarray]] = {  # (vertices, faces, skeleton, *, progress) -> (V, J) weights
+    "learned": learned_weights,
     "geodesic": geodesic_weights,
     "heat": heat_weights,
 }
+HAND_WRITTEN = ("geodesic", "heat")  # what `auto` compares by unsupervised score when the learned model is unavailable
 MAX_VERTICES = 2_000_000
 MAX_JOINTS = 1024
 # The methods hold dense (vertices × joints) arrays: bench/skinning.py peaks at 3.7 GB for 530k × 60 (about
@@ -42,11 +45,12 @@ SMOOTH_STRENGTH = 0.25  # per pass; 2 passes: dev-set L1 0.474 vs 0.487 unsmooth
 class SkinningResult:
     """weights: (V, J) float32 CSR, ≤ max_influences per row, rows sum to 1.
     method: the method that produced them; scores: method → unsupervised quality signals (see quality.py),
-    plus "seconds" per method."""
+    plus "seconds" per method; reason: why `auto` chose it (empty for a named method)."""
 
     weights: sp.csr_matrix
     method: str
     scores: dict[str, dict[str, float]] = field(default_factory=dict)
+    reason: str = ""
 
 
 def _check_inputs(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, max_influences: int) -> tuple[np.ndarray, np.ndarray]:
@@ -85,12 +89,19 @@ def compute_weights(
 ) -> SkinningResult:
     """Skinning weights of a mesh for a skeleton in the same space.
 
-    vertices: (V, 3) float, faces: (F, 3) int, skeleton: J joints. `auto` runs every method and keeps the
-    one with the lowest unsupervised `score`; all methods' scores are returned either way.
+    vertices: (V, 3) float, faces: (F, 3) int, skeleton: J joints. `auto` takes the learned model, which
+    scores better than the hand-written methods on the corpus's `val` split (its file carries those figures);
+    when its weights cannot be read, `auto` runs geodesic and heat and keeps the lower unsupervised `score`.
     Raises InvalidInput / LimitExceeded for unusable input.
     """
     if method != "auto" and method not in METHODS:
-        raise InvalidInput(f"unknown skinning method {method!r}; use auto, geodesic or heat", code="invalid_option", field="skinning")
+        raise InvalidInput(f"unknown skinning method {method!r}; use auto, {', '.join(METHODS)}", code="invalid_option", field="skinning")
+    reason, use_learned = "", False
+    if method == "auto":
+        try:
+            reason, use_learned = learned_summary(), True
+        except ModelUnavailable as exc:
+            reason = f"{exc}; chose the hand-written method with the best unsupervised score"
     v, f = _check_inputs(vertices, faces, skeleton, max_influences)
     mesh = referenced_mesh(v, f)  # vertices no face uses would stretch the voxel grid; they get weights at the end
     v, f = mesh.vertices, mesh.faces
@@ -114,7 +125,7 @@ def compute_weights(
         step(1.0)
         return weights, scores
 
-    chosen = list(METHODS) if method == "auto" else [method]
+    chosen = [method] if method != "auto" else (["learned"] if use_learned else list(HAND_WRITTEN))
     results: dict[str, sp.csr_matrix] = {}
     scores: dict[str, dict[str, float]] = {}
     tracker = _MethodProgress(chosen)
@@ -135,7 +146,7 @@ def compute_weights(
             tracker.stop.set()  # the other method stops at its next checkpoint instead of running on
             raise
     best = min(chosen, key=lambda name: scores[name]["score"])
-    return SkinningResult(_all_vertices(results[best], mesh, np.asarray(vertices, dtype=np.float64)), best, scores)
+    return SkinningResult(_all_vertices(results[best], mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
 
 
 class _MethodProgress:

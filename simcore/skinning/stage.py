@@ -60,6 +60,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     state.report["skinning"] = {
         "requested": options.skinning,
         "method": result.method,
+        "reason": result.reason,
         "max_influences": options.max_influences,
         "smooth_iterations": options.smooth_iterations,
         "excluded_joints": [name for name, out in zip(state.skeleton.names, drop) if out],
