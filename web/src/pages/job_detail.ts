@@ -5,19 +5,32 @@ import { withKey } from "../api/session";
 import { reportTables, type Report } from "../report/report_tables";
 import { h, replace } from "../ui/dom";
 import { bytes, dateTime, duration } from "../ui/format";
-import { errorLine, progressBar, stageText, statusBadge } from "../ui/job_bits";
+import { errorLine, progressBar, stageText, statusBadge, warningsBadge } from "../ui/job_bits";
+import type { WorstFrame } from "../viewer/viewer_panel";
 
 function numbers(v: unknown): number[] | null {
   return Array.isArray(v) && v.length > 1 && v.every((x) => typeof x === "number") ? v : null;
 }
 
+const figure = (v: number | null | undefined) => (v === null || v === undefined ? "" : Number(v.toPrecision(4)).toString());
+
+/** The quality checks' worst frames as viewer times: frame / the clip's fps (report.motion.clip.fps). */
+function worstFrames(job: Job, report: Report | null): WorstFrame[] {
+  const clip = (report?.motion as { clip?: { fps?: unknown } } | undefined)?.clip;
+  const fps = typeof clip?.fps === "number" ? clip.fps : null;
+  if (!fps) return [];
+  return job.warnings.filter((w) => w.frame !== null && w.frame !== undefined)
+    .map((w) => ({ label: `${w.code} · frame ${w.frame}`, time: (w.frame as number) / fps, model: w.stage === "refine" ? "refined.glb" : "animated.glb" }));
+}
+
 export function jobDetailPage(root: HTMLElement, id: string): () => void {
   const head = h("div", { id: "job-head" });
   const facts = h("div", {});
+  const warningsHost = h("section", { id: "warnings" });
   const viewerHost = h("section", { id: "viewer", "aria-label": "3D viewer" });
   const artifactsHost = h("section", { id: "artifacts" });
   const reportHost = h("section", { id: "report" });
-  replace(root, h("p", {}, h("a", { href: "#/jobs" }, "← Jobs")), head, facts, viewerHost, artifactsHost, reportHost);
+  replace(root, h("p", {}, h("a", { href: "#/jobs" }, "← Jobs")), head, facts, warningsHost, viewerHost, artifactsHost, reportHost);
   let stopWatch: (() => void) | null = null;
   let disposeViewer: (() => void) | null = null;
   let closed = false;
@@ -28,7 +41,7 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
       try { renderHead(await api.cancelJob(job.id)); } catch (e) { if (e instanceof ApiError) alert(e.message); }
     } }, "Cancel job") : null;
     replace(head,
-      h("div", { class: "row" }, h("h1", { style: "margin:0" }, job.mesh.filename), statusBadge(job), cancel),
+      h("div", { class: "row" }, h("h1", { style: "margin:0" }, job.mesh.filename), statusBadge(job), warningsBadge(job), cancel),
       h("div", { class: "row", style: "margin:10px 0" }, h("div", { style: "width:320px" }, progressBar(job)),
         h("span", { class: "stage", id: "job-stage" }, stageText(job))),
       job.error ? h("div", { class: "errorbox", id: "job-error" }, h("strong", {}, "Failed: "), errorLine(job)) : null);
@@ -39,6 +52,17 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
       h("dt", {}, "Mesh"), h("dd", {}, `${job.mesh.filename} (${job.mesh.format}, ${bytes(job.mesh.size)})`),
       h("dt", {}, "Motion"), h("dd", {}, job.motion ? `${job.motion.filename} (${job.motion.format}, ${bytes(job.motion.size)})` : "none"),
       h("dt", {}, "Options"), h("dd", {}, h("details", {}, h("summary", {}, "JSON"), h("pre", {}, JSON.stringify(job.options, null, 2))))));
+  }
+
+  function renderWarnings(job: Job): void {
+    if (!job.warnings.length) { replace(warningsHost); return; }
+    replace(warningsHost, h("h2", {}, "Warnings"), h("table", { id: "warnings-table" },
+      h("thead", {}, h("tr", {}, h("th", {}, "Stage"), h("th", {}, "Code"), h("th", {}, "Message"), h("th", { class: "num" }, "Figure"),
+        h("th", { class: "num" }, "Threshold"), h("th", { class: "num" }, "Frame"))),
+      h("tbody", {}, ...job.warnings.map((w) => h("tr", { "data-code": w.code },
+        h("td", {}, w.stage), h("td", { class: w.hard ? "hard" : "" }, h("code", {}, w.code), w.hard ? " (past the failing limit)" : ""),
+        h("td", {}, w.message), h("td", { class: "num" }, figure(w.figure)), h("td", { class: "num" }, figure(w.threshold)),
+        h("td", { class: "num" }, w.frame === null || w.frame === undefined ? "" : String(w.frame)))))));
   }
 
   function renderArtifacts(job: Job): void {
@@ -74,11 +98,13 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
     const lbs = numbers(refine?.volume_ratio_lbs), refined = numbers(refine?.volume_ratio_refined);
     const host = h("div", {});
     replace(viewerHost, h("h2", {}, "Viewer"), host);
-    disposeViewer = mountViewer(host, { artifacts: job.artifacts, volume: lbs && refined ? { lbs, refined } : null });
+    disposeViewer = mountViewer(host, { artifacts: job.artifacts, volume: lbs && refined ? { lbs, refined } : null,
+      worstFrames: worstFrames(job, report) });
   }
 
   function update(job: Job): void {
     renderHead(job);
+    renderWarnings(job);
     if (isTerminal(job) && !finished) {
       finished = true;
       renderResults(job);

@@ -3,7 +3,7 @@ import { ApiError, api, type Job, type JobStatus } from "../api/client";
 import { isTerminal, watchJob } from "../api/job_watch";
 import { h, replace } from "../ui/dom";
 import { bytes, dateTime, duration } from "../ui/format";
-import { errorLine, progressBar, stageText, statusBadge } from "../ui/job_bits";
+import { errorLine, progressBar, stageText, statusBadge, warningsBadge } from "../ui/job_bits";
 
 const PAGE_SIZES = [10, 20, 50];
 const MAX_STREAMS = 3;  // leave the browser's per-host connections for everything else
@@ -43,7 +43,7 @@ export function jobsPage(root: HTMLElement): () => void {
   function fill(tr: HTMLTableRowElement, job: Job): void {
     replace(tr,
       h("td", {}, h("a", { href: `#/jobs/${job.id}` }, job.mesh.filename), h("div", { class: "muted" }, `${job.mesh.format} · ${bytes(job.mesh.size)}`)),
-      h("td", {}, statusBadge(job)),
+      h("td", {}, statusBadge(job), " ", warningsBadge(job)),
       h("td", {}, progressBar(job), h("div", { class: "muted stage" }, stageText(job)), errorLine(job)),
       h("td", {}, dateTime(job.created_at)),
       h("td", { class: "num" }, duration(job.started_at, job.finished_at)),

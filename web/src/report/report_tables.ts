@@ -24,7 +24,7 @@ function section(id: string, title: string, ...content: (Node | null)[]): HTMLEl
 function warnings(report: Report): HTMLElement | null {
   const list = Array.isArray(report.warnings) ? report.warnings : [];
   return section("warnings", `Warnings (${list.length})`,
-    list.length ? h("ul", {}, ...list.map((w) => h("li", {}, String(w)))) : h("p", { class: "muted" }, "none"));
+    list.length ? h("ul", {}, ...list.map((w) => h("li", {}, isObj(w) ? `${w.stage}: ${w.message}` : String(w)))) : h("p", { class: "muted" }, "none"));
 }
 
 function skeleton(report: Report): HTMLElement | null {
@@ -90,6 +90,6 @@ export function reportTables(report: Report): HTMLElement {
   return h("div", { class: "report grid2" },
     h("div", {}, mesh, warnings(report), timings(report)),
     h("div", {}, skeleton(report), skinning(report), generic(report, "weights", "Exported weights"), generic(report, "motion", "Motion"),
-      generic(report, "refine", "Physics refinement"), validation(report)),
+      generic(report, "refine", "Physics refinement"), generic(report, "quality", "Quality checks"), validation(report)),
     h("details", { style: "grid-column:1 / -1" }, h("summary", {}, "raw report.json"), h("pre", {}, JSON.stringify(report, null, 2))));
 }

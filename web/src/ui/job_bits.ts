@@ -1,10 +1,19 @@
-// Small pieces shared by the jobs list and the job detail page: status badge, progress bar, error line.
+// Small pieces shared by the jobs list and the job detail page: status and warnings badges, progress bar, error line.
 import type { Job } from "../api/client";
 import { percent } from "./format";
 import { h } from "./dom";
 
 export function statusBadge(job: Job): HTMLElement {
   return h("span", { class: `badge ${job.status}`, "data-status": job.status }, job.status);
+}
+
+/** "N warnings" (red when one is past a failing threshold), titled with their messages; null without any. */
+export function warningsBadge(job: Job): HTMLElement | null {
+  const n = job.warnings.length;
+  if (!n) return null;
+  const hard = job.warnings.some((w) => w.hard);
+  return h("span", { class: `badge warnings${hard ? " hard" : ""}`, "data-warnings": String(n),
+    title: job.warnings.map((w) => `${w.stage}: ${w.message}`).join("\n") }, `${n} warning${n > 1 ? "s" : ""}`);
 }
 
 export function progressBar(job: Job): HTMLElement {

@@ -12,9 +12,13 @@ declare global {
   interface Window { rigforgeViewer?: { view: SceneView; state: string; jointScreenPoints: () => ReturnType<SceneView["jointScreenPoints"]> } }
 }
 
+/** A quality check's worst moment: `time` seconds into the clip of `model` (animated.glb or refined.glb). */
+export interface WorstFrame { label: string; time: number; model: string }
+
 export interface ViewerInput {
   artifacts: Artifact[];
   volume?: { lbs: number[]; refined: number[] } | null;
+  worstFrames?: WorstFrame[];
 }
 
 export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
@@ -53,6 +57,9 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
     oninput: () => { setPlaying(false); view.setTime(Number(scrub.value) * view.duration()); syncTime(); } });
   const followBox = h("input", { type: "checkbox", id: "viewer-follow", checked: true, onchange: () => { view.follow = followBox.checked; } });
   const timeText = h("span", { class: "muted", id: "viewer-time" }, "0.00 s");
+  const worst = (input.worstFrames ?? []).filter((w) => byName.has(w.model));
+  const worstButtons = worst.map((w, i) => h("button", { type: "button", class: "worst-frame", id: `viewer-worst-${i}`,
+    title: `show ${w.model} at ${w.time.toFixed(2)} s`, onclick: () => showWorst(w) }, w.label));
   const plot: VolumePlot | null = input.volume ? volumePlot(input.volume.lbs, input.volume.refined) : null;
 
   const cache = new Map<string, Promise<LoadedModel>>();
@@ -118,6 +125,14 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
     }
   }
 
+  async function showWorst(w: WorstFrame): Promise<void> {
+    if (modelSelect.value !== COMPARE && modelSelect.value !== w.model) { modelSelect.value = w.model; showSelection(); }
+    await loadArtifact(w.model);
+    setPlaying(false);
+    view.setTime(Math.min(w.time, view.duration()));
+    syncTime();
+  }
+
   function showSelection(): void {
     const v = modelSelect.value;
     if (v === COMPARE) show([loadArtifact("animated.glb"), loadArtifact("refined.glb")], ["animated.glb", "refined.glb"]);
@@ -165,7 +180,8 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
         h("label", {}, skeletonBox, " Skeleton overlay")),
       h("fieldset", {}, h("legend", {}, "Animation"), h("label", { for: "viewer-clip" }, "Clip"), clipSelect,
         h("div", { class: "row" }, playButton, timeText), scrub,
-        h("label", { title: "keep the character in view when the clip moves it" }, followBox, " Follow the character")))),
+        h("label", { title: "keep the character in view when the clip moves it" }, followBox, " Follow the character")),
+      worst.length ? h("fieldset", { id: "viewer-worst" }, h("legend", {}, "Worst frames (quality checks)"), ...worstButtons) : null)),
   plot ? h("div", { class: "panel", style: "margin-top:12px" }, h("h3", {}, "Volume change: LBS vs physics"),
     h("p", { class: "muted" }, "signed volume relative to the rest pose per frame; physics should stay nearer 0 %"), plot.el) : null);
 
