@@ -16,6 +16,7 @@ from simcore.geometry.referenced import referenced_mesh
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
 from simcore.io.gltf_static import bake_static_glb, static_arrays
+from simcore.io.obj_polygons import check_polygon_sizes
 from simcore.pipeline import PipelineState, StageProgress
 from simcore.skeleton.types import Skeleton
 
@@ -53,6 +54,8 @@ def _load_other(data: bytes, fmt: str) -> tuple[np.ndarray, np.ndarray, list]:
     """OBJ/PLY/STL through trimesh: world-space geometries in scene-graph order (vertex order kept)."""
     import trimesh
 
+    if fmt == "obj":
+        check_polygon_sizes(data)
     try:
         scene = trimesh.load(io.BytesIO(data), file_type=fmt, force="scene", process=False)
     except Exception as exc:  # noqa: BLE001 - trimesh raises many types for broken files
@@ -69,6 +72,8 @@ def _load_other(data: bytes, fmt: str) -> tuple[np.ndarray, np.ndarray, list]:
 
 
 def _check(vertices: np.ndarray, faces: np.ndarray, max_vertices: int) -> None:
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        raise InvalidInput("vertices need three coordinates and faces three corners", code="unreadable_mesh", field="mesh")
     if len(vertices) == 0 or len(faces) == 0:
         raise InvalidInput("the mesh has no triangles", code="empty_mesh", field="mesh")
     if len(vertices) > max_vertices:

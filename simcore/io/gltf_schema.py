@@ -185,6 +185,9 @@ def validate_structure(doc: dict) -> None:
     """Raise InvalidInput/LimitExceeded/UnsupportedFormat for anything a reader could trip over."""
     if json_depth(doc, MAX_JSON_DEPTH) > MAX_JSON_DEPTH:
         raise LimitExceeded(f"the glTF JSON is nested more than {MAX_JSON_DEPTH} levels deep", code="json_too_deep", field="mesh")
+    for key in SCHEMA:  # first, so every index check below can count a collection
+        if key in doc and not isinstance(doc[key], list):
+            raise _fail(f"'{key}' must be an array")
     for key, check in TOP_LEVEL.items():
         if key in doc:
             check(doc[key], key, doc)
