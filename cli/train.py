@@ -42,6 +42,7 @@ def data(config: ConfigOption = DEFAULT_CONFIG) -> None:
 def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
     """Train the skinning model on the cache, keep the best `val` state, write the .safetensors."""
     from simcore.skinning.attention_model import ModelConfig
+    from simcore.training.model_card import write_model_card
     from simcore.training.skin_train import TrainConfig, train_skin
 
     spec = _read(config)
@@ -53,6 +54,10 @@ def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
     with count_bar("training") as update:
         summary = train_skin(train_config, Path(spec["cache"]), Path(spec["out"]), log,
                              lambda step, total, entry: update(_describe(entry), step, total))
+    cache = Path(spec["cache"])
+    card = write_model_card(Path(spec["out"]), summary, _read(cache / "summary.json"), _read(cache / "data_config.json"),
+                            f"rigforge train data --config {config} && rigforge train skin --config {config}")
+    Console().print(f"model card: {card}")
     Console().print(f"best val L1 {summary['val']['l1']:.4f}, deformation {summary['val']['deform']:.5f} at step "
                     f"{summary['best_step']} (start {summary['val_at_start']['l1']:.4f}); {summary['seconds']:.0f} s → {spec['out']}")
 
