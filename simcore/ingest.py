@@ -16,6 +16,7 @@ from simcore.geometry.referenced import referenced_mesh
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
 from simcore.io.gltf_static import bake_static_glb, static_arrays
+from simcore.io.gltf_zip import glb_from_zip
 from simcore.io.obj_polygons import check_polygon_sizes
 from simcore.pipeline import PipelineState, StageProgress
 from simcore.skeleton.types import Skeleton
@@ -116,8 +117,10 @@ def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray)
 
 def ingest(data: bytes, fmt: str, *, up_axis: str | None = None, units: str = "auto",
            max_vertices: int = DEFAULT_MAX_VERTICES) -> IngestedMesh:
-    """Load an upload of format `fmt` (glb, gltf, obj, ply, stl) into an IngestedMesh (+Y up, metres)."""
+    """Load an upload of format `fmt` (glb, gltf, zip, obj, ply, stl) into an IngestedMesh (+Y up, metres)."""
     warnings: list[str] = []
+    if fmt == "zip":  # a .gltf with its .bin and images, packed into one GLB so its textures are kept
+        data, fmt = glb_from_zip(data), "glb"
     doc = GltfDocument.from_bytes(data) if fmt in ("glb", "gltf") else None
     if doc is not None:
         raw_vertices, raw_faces = bake_static_glb(doc, np.eye(4))[1:]

@@ -13,6 +13,7 @@ from api.settings import get_settings
 from api.storage import LocalStorage, StoredFile, UploadTooLarge
 from simcore.errors import SimcoreError
 from simcore.io.gltf_document import GltfDocument
+from simcore.io.gltf_zip import glb_from_zip
 from simcore.io.sniff import require_kind, sniff
 
 PARSE_WAIT_SECONDS = 5.0
@@ -34,19 +35,21 @@ def upload_format(head: bytes, size: int, *, kind: str, field: str) -> str:
 
 
 def check_structure(path: Path, fmt: str, *, field: str) -> None:
-    """Parse a glTF upload's container and JSON (structure, bounds, no external URIs; Draco is left to the worker).
+    """Parse a glTF upload's container and JSON (a .zip packed into one GLB first; structure, bounds, no external
+    buffer URIs; Draco is left to the worker).
 
     At most `max_parallel_parses` run at once, since a big .gltf costs several times its size in memory;
     a request that finds no free slot within PARSE_WAIT_SECONDS is answered 503 with Retry-After.
     """
-    if fmt not in ("glb", "gltf"):
+    if fmt not in ("glb", "gltf", "zip"):
         return
     slots = _parse_slots(get_settings().max_parallel_parses)
     if not slots.acquire(timeout=PARSE_WAIT_SECONDS):
         raise Problem(503, "server_busy", "too many uploads are being checked right now; retry shortly", field=field,
                       headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
     try:
-        GltfDocument.from_bytes(path.read_bytes(), decode_draco=False)
+        data = path.read_bytes()
+        GltfDocument.from_bytes(glb_from_zip(data) if fmt == "zip" else data, decode_draco=False)
     except SimcoreError as exc:
         exc.field = field
         raise

@@ -7,11 +7,11 @@ import struct
 
 from simcore.errors import InvalidInput, UnsupportedFormat
 
-MESH_FORMATS = ("glb", "gltf", "obj", "ply", "stl")
+MESH_FORMATS = ("glb", "gltf", "zip", "obj", "ply", "stl")  # zip: a .gltf with its .bin and images
 MOTION_FORMATS = ("bvh", "glb", "gltf")
 MEDIA_TYPES = {
     "glb": "model/gltf-binary", "gltf": "model/gltf+json", "obj": "model/obj", "ply": "application/ply",
-    "stl": "model/stl", "bvh": "application/x-bvh", "fbx": "application/octet-stream",
+    "stl": "model/stl", "bvh": "application/x-bvh", "fbx": "application/octet-stream", "zip": "application/zip",
 }
 GLTF_KEYS = (b'"asset"', b'"accessors"', b'"bufferViews"', b'"buffers"', b'"meshes"', b'"nodes"', b'"scenes"')
 _OBJ_LINE = re.compile(rb"^\s*(v|vt|vn|f|o|g|s|usemtl|mtllib|#)(\s|$)")
@@ -27,12 +27,14 @@ def _looks_like_obj(head: bytes) -> bool:
 def sniff(head: bytes, size: int) -> str:
     """Format name of a file from its first bytes (`head`, ≥ 4 KiB when the file is that long) and size.
 
-    Returns one of glb, gltf, obj, ply, stl, bvh, fbx; raises InvalidInput for anything else.
+    Returns one of glb, gltf, zip, obj, ply, stl, bvh, fbx; raises InvalidInput for anything else.
     """
     if size == 0:
         raise InvalidInput("the file is empty", code="empty_file")
     if head[:4] == b"glTF":
         return "glb"
+    if head[:4] == b"PK\x03\x04":
+        return "zip"
     if head.startswith(b"Kaydara FBX Binary") or head.lstrip().startswith(b"; FBX"):
         return "fbx"
     if head[:4] == b"ply\n" or head[:5] == b"ply\r\n":
@@ -50,7 +52,8 @@ def sniff(head: bytes, size: int) -> str:
         return "stl"
     if _looks_like_obj(head):
         return "obj"
-    raise InvalidInput("unrecognised file format (expected GLB, glTF, OBJ, PLY, STL or BVH)", code="unknown_format")
+    raise InvalidInput("unrecognised file format (expected GLB, glTF, a .zip of a glTF, OBJ, PLY, STL or BVH)",
+                       code="unknown_format")
 
 
 def require_kind(fmt: str, kind: str, field: str) -> str:
