@@ -39,7 +39,7 @@ function dropZone(id: string, title: string, accept: string, required: boolean, 
 export function newJobPage(root: HTMLElement): () => void {
   let meshFile: File | null = null, motionFile: File | null = null;
   let abort: (() => void) | null = null;
-  const mesh = dropZone("mesh", "Mesh", ".glb,.gltf,.obj,.ply,.stl", true, (f) => { meshFile = f; });
+  const mesh = dropZone("mesh", "Mesh", ".glb,.gltf,.zip,.obj,.ply,.stl", true, (f) => { meshFile = f; });
   const motion = dropZone("motion", "Motion (optional)", ".bvh,.glb,.gltf", false, (f) => { motionFile = f; });
 
   const skeleton = select("opt-skeleton", "options.skeleton", [["auto", "auto (humanoid fit, else geometric)"], ["geometric", "geometric (any creature)"],
