@@ -12,26 +12,29 @@ app = typer.Typer(help="Manage API keys.", no_args_is_help=True)
 
 
 @app.command("create")
-def create(name: Annotated[str, typer.Option("--name", help="who or what uses this key")]) -> None:
+def create(
+    name: Annotated[str, typer.Option("--name", help="who or what uses this key")],
+    admin: Annotated[bool, typer.Option("--admin", help="the key may list, create and revoke keys over HTTP")] = False,
+) -> None:
     """Create a key and print it on stdout (it cannot be shown again)."""
     from api.db import session_scope
     from api.keys.service import create_key
 
     with session_scope() as session:
-        _, secret = create_key(session, name=name)
+        _, secret = create_key(session, name=name, admin=admin)
     typer.echo(secret)
 
 
 @app.command("list")
 def list_() -> None:
-    """List keys (prefix, name, created, revoked)."""
+    """List keys (prefix, name, admin, created, revoked)."""
     from api.db import session_scope
     from api.keys.service import list_keys
 
-    table = Table("id", "prefix", "name", "created", "revoked")
+    table = Table("id", "prefix", "name", "admin", "created", "revoked")
     with session_scope() as session:
         for k in list_keys(session):
-            table.add_row(str(k.id), k.prefix, k.name, k.created_at.isoformat(timespec="seconds"),
+            table.add_row(str(k.id), k.prefix, k.name, "yes" if k.is_admin else "", k.created_at.isoformat(timespec="seconds"),
                           k.revoked_at.isoformat(timespec="seconds") if k.revoked_at else "")
     Console().print(table)
 

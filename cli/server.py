@@ -22,7 +22,7 @@ def migrate() -> None:
 
 
 def ensure_local_key() -> str | None:
-    """On a fresh embedded install, create a 'local' key and keep it in data_dir/local-api-key (mode 600)."""
+    """On a fresh embedded install, create a 'local' admin key and keep it in data_dir/local-api-key (mode 600)."""
     from api.db import session_scope
     from api.keys.service import create_key, list_keys
 
@@ -33,7 +33,7 @@ def ensure_local_key() -> str | None:
     with session_scope() as session:
         if list_keys(session):
             return None
-        _, secret = create_key(session, name="local")
+        _, secret = create_key(session, name="local", admin=True)
     path.write_text(secret + "\n")
     path.chmod(0o600)
     return secret

@@ -1,7 +1,7 @@
-"""/api/v1/keys: who am I (the dashboard's sign-in check), and key management on the embedded default.
+"""/api/v1/keys: who am I (the dashboard's sign-in check), and key management by admin keys.
 
-Listing, creating and revoking keys over HTTP is allowed only when `settings.env == "development"`
-(the single-user embedded default); elsewhere keys are managed with `rigforge keys` on the server.
+Listing, creating and revoking keys needs an admin key in every environment: the local key `rigforge serve`
+makes on a fresh embedded install, or one made with `rigforge keys create --admin` on the server.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from api.db import session_scope
 from api.errors import Problem
 from api.keys import service
 from api.models import ApiKey
-from api.settings import get_settings
 
 router = APIRouter(prefix="/api/v1/keys", tags=["keys"])
 
@@ -27,12 +26,14 @@ class KeyOut(BaseModel):
     id: uuid.UUID
     name: str
     prefix: str
+    admin: bool = Field(False, description="admin keys manage keys")
     created_at: datetime
     revoked_at: datetime | None = None
 
 
 class KeyCreate(BaseModel):
     name: str = Field(min_length=1, max_length=200, description="who or what uses this key")
+    admin: bool = Field(False, description="let the new key manage keys too")
 
 
 class KeyCreated(BaseModel):
@@ -41,14 +42,14 @@ class KeyCreated(BaseModel):
 
 
 def to_schema(row: ApiKey) -> KeyOut:
-    return KeyOut(id=row.id, name=row.name, prefix=row.prefix, created_at=row.created_at, revoked_at=row.revoked_at)
+    return KeyOut(id=row.id, name=row.name, prefix=row.prefix, admin=row.is_admin, created_at=row.created_at,
+                  revoked_at=row.revoked_at)
 
 
 def key_admin(key: CurrentKey) -> ApiKey:
-    """The signed-in key, when this deployment lets keys be managed over HTTP (development only)."""
-    if get_settings().env != "development":
-        raise Problem(403, "key_management_disabled",
-                      "keys are managed with `rigforge keys` on the server outside the embedded development default")
+    """The signed-in key, when it is an admin key."""
+    if not key.is_admin:
+        raise Problem(403, "admin_required", "only an admin key manages keys (`rigforge keys create --admin` on the server)")
     return key
 
 
@@ -60,20 +61,20 @@ def whoami(key: CurrentKey) -> KeyOut:
     return to_schema(key)
 
 
-@router.get("", response_model=list[KeyOut], summary="List every key, oldest first (development only)")
+@router.get("", response_model=list[KeyOut], summary="List every key, oldest first (admin keys only)")
 def list_keys(_: KeyAdmin) -> list[KeyOut]:
     with session_scope() as session:
         return [to_schema(k) for k in service.list_keys(session)]
 
 
-@router.post("", status_code=201, response_model=KeyCreated, summary="Create a key (development only)")
+@router.post("", status_code=201, response_model=KeyCreated, summary="Create a key (admin keys only)")
 def create_key(body: KeyCreate, _: KeyAdmin) -> KeyCreated:
     with session_scope() as session:
-        row, secret = service.create_key(session, name=body.name.strip() or "unnamed")
+        row, secret = service.create_key(session, name=body.name.strip() or "unnamed", admin=body.admin)
         return KeyCreated(key=to_schema(row), secret=secret)
 
 
-@router.post("/{key_id}/revoke", response_model=KeyOut, summary="Revoke a key (development only)")
+@router.post("/{key_id}/revoke", response_model=KeyOut, summary="Revoke a key (admin keys only)")
 def revoke_key(key_id: uuid.UUID, _: KeyAdmin) -> KeyOut:
     with session_scope() as session:
         row = service.revoke(session, key_id_or_prefix=str(key_id))

@@ -19,10 +19,10 @@ def hash_key(secret: str) -> str:
     return hashlib.sha256(secret.encode()).hexdigest()
 
 
-def create_key(session: Session, *, name: str) -> tuple[ApiKey, str]:
-    """A new key row and its secret (the only time the secret exists outside the client)."""
+def create_key(session: Session, *, name: str, admin: bool = False) -> tuple[ApiKey, str]:
+    """A new key row and its secret (the only time the secret exists outside the client); admin keys manage keys."""
     secret = KEY_PREFIX + secrets.token_urlsafe(32)
-    row = ApiKey(name=name, prefix=secret[:10], key_hash=hash_key(secret))
+    row = ApiKey(name=name, prefix=secret[:10], key_hash=hash_key(secret), is_admin=admin)
     session.add(row)
     session.commit()
     return row, secret
