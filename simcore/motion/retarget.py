@@ -5,7 +5,9 @@ Method (world-space delta transfer):
    find the quarter turn about +Y that makes the source face the way the target faces.
 2. Rest alignment: for each mapped target joint, the rotation A_j that turns its rest bone directions (to
    its nearest mapped descendants) onto the source's rest bone directions. This is what lets a T-pose
-   source drive an A-pose target: at the source's rest, the target takes the source's pose.
+   source drive an A-pose target: at the source's rest, the target takes the source's pose. A branching
+   joint (a hip) whose bones no single rotation brings near the source's is placed differently, not posed
+   differently, and keeps its own rest (aligning it folded the fox's waist in every frame).
 3. Per frame, the source joint's world delta rotation D_s = R_world(t) · R_rest⁻¹ drives the target:
    D_t = D_s · A_j; unmapped target joints ride rigidly with their parent. Target locals follow from
    D_t · R_bind (R_bind = the target's bind orientation, identity for world-aligned skeletons).
@@ -33,6 +35,9 @@ from simcore.skeleton.types import Skeleton
 
 MIN_BODY_SLOTS = 8  # shared Mixamo body slots needed to trust name matching over structure
 CONTACT_BAND = 0.05  # joints within this fraction of the height above the lowest one touch the floor
+# A branching joint whose best rest rotation still leaves one of its bones this far (radians) from the source's
+# is placed differently from the source's joint, not posed differently: it keeps its own rest (no alignment).
+BRANCH_MISFIT = np.pi / 4
 GROUND_PERCENTILE = 5.0  # of the source's per-frame lowest contact height: its floor, robust to dips
 
 
@@ -142,7 +147,17 @@ def _rest_alignment(source: Skeleton, s_rest: np.ndarray, target: Skeleton, mapp
         keep = (np.linalg.norm(u_arr, axis=1) > 1e-9) & (np.linalg.norm(v_arr, axis=1) > 1e-9)
         if keep.any():
             out[j] = rotation_between(u_arr[keep], v_arr[keep])
+            if keep.sum() > 1 and _misfit(out[j], u_arr[keep], v_arr[keep]) > BRANCH_MISFIT:
+                out[j] = None  # the bones fan out differently: joints placed differently, not posed differently
     return out
+
+
+def _misfit(rot: np.ndarray, u: np.ndarray, v: np.ndarray) -> float:
+    """Largest angle (radians) between rotated directions u (N, 3) and v (N, 3)."""
+    a = u @ rot.T
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = v / np.linalg.norm(v, axis=1, keepdims=True)
+    return float(np.arccos(np.clip((a * b).sum(axis=1), -1.0, 1.0)).max())
 
 
 def _contacts(positions: np.ndarray, candidates: np.ndarray) -> np.ndarray:

@@ -152,3 +152,25 @@ def test_unnamed_skeleton_maps_by_chains_and_overrides_win():
     with pytest.raises(InvalidInput) as err:
         map_joints(anonymous, target, {"nope": "mixamorig:Neck"})
     assert err.value.field == "motion.joint_map"
+
+
+
+def _hip_rig(hip, spine, legs, tail) -> Skeleton:  # noqa: ANN001 - (3,) positions of a four-legged hip fan
+    pos = np.array([hip, spine, [legs[0], *legs[1:]], [-legs[0], *legs[1:]], tail], dtype=np.float64)
+    ends = pos[1:] + [[0, 0, 0.15], [0, -0.3, 0], [0, -0.3, 0], [0, 0, -0.2]]
+    return Skeleton(np.vstack([pos, ends]), np.array([-1, 0, 0, 0, 0, 1, 2, 3, 4]),
+                    ["hip", "spine", "leg_l", "leg_r", "tail", "chest", "knee_l", "knee_r", "tail_tip"]).validate()
+
+
+def test_hip_whose_bones_fan_out_differently_is_not_turned_at_rest():
+    """The fox's case: the artist's hip sits low in the pelvis (spine, legs and tail leave it upwards), ours on
+    the body's medial line (spine forward, legs down). No one rotation fits those bones, so the hip is not
+    turned to fit them: at the source's rest pose the target stays at its own rest (it collapsed the waist)."""
+    source = _hip_rig([0, 0.43, -0.27], [0, 0.55, -0.22], [0.07, 0.49, -0.30], [0, 0.53, -0.40])
+    target = _hip_rig([0, 0.47, -0.20], [0, 0.48, -0.02], [0.063, 0.39, -0.27], [0, 0.475, -0.30])
+    rest = np.broadcast_to(kinematics.rest_local_matrices(source)[:, :3, 3], (2, source.num_joints, 3)).copy()
+    still = JointAnimation(list(source.names), 30.0, np.tile([0.0, 0.0, 0.0, 1.0], (2, source.num_joints, 1)), rest)
+    options = MotionOptions(joint_map={n: n for n in source.names})
+    out = retarget(MotionClip(source, still, rest_is_standing=True, source_format="test"), target, options)
+    hip = _world(target, out.animation)[:, 0, :3, :3]
+    assert np.allclose(hip, np.eye(3), atol=1e-9)
