@@ -49,7 +49,8 @@ def file_animation(skeleton: Skeleton, written: Skeleton, animation: "JointAnima
     tracks = joint_tracks(skeleton, animation)
     world = global_transforms(skeleton, compose(tracks.rotations, tracks.translations))  # (T, J, 4, 4)
     names = list(animation.joint_names)
-    rotations, translations = list(np.moveaxis(animation.rotations, 1, 0)), list(np.moveaxis(animation.translations, 1, 0))
+    rotations = list(np.moveaxis(animation.rotations, 1, 0))  # per joint: (T, 4)
+    translations = list(np.moveaxis(animation.translations, 1, 0))  # per joint: (T, 3)
     for j in moved:
         own = world[:, slot[written.names[j]]]
         p = written.parents[j]

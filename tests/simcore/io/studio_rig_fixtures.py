@@ -99,7 +99,7 @@ def studio_rig(order: list[str], *, image_uri: str | None = None, animated: bool
     data = b"".join(b + b"\0" * (-len(b) % 4) for b in blobs)
     accessors = [{"bufferView": k, "componentType": c, "count": n, "type": t} for k, (t, c, n) in enumerate(kinds)]
     accessors[0] |= {"min": v.min(0).tolist(), "max": v.max(0).tolist()}
-    for k, (_, _, acc) in enumerate(channels):
+    for _, _, acc in channels:
         accessors[acc] |= {"min": [0.0], "max": [1.0]}
     image = {"uri": image_uri} if image_uri else {"uri": "data:image/png;base64," + base64.b64encode(png_bytes()).decode()}
     doc = {

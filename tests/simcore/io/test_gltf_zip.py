@@ -88,7 +88,8 @@ def _with_gltf(**kwargs) -> bytes:
     (lambda: make_zip({"a.gltf": b"{}", "b.gltf": b"{}"}), "zip_several_models"),
     (lambda: make_zip({"a.gltf": b"{not json"}), "invalid_gltf"),
     (lambda: b"PK\x03\x04" + bytes(200), "invalid_zip"),
-], ids=["entry-dotdot", "entry-absolute", "entry-backslash", "uri-dotdot", "uri-drive", "uri-scheme", "missing-buffer", "no-model", "two-models", "bad-json", "not-a-zip"])
+], ids=["entry-dotdot", "entry-absolute", "entry-backslash", "uri-dotdot", "uri-drive", "uri-scheme",
+        "missing-buffer", "no-model", "two-models", "bad-json", "not-a-zip"])
 def test_bad_zips_are_refused_with_a_code(make, code):
     with pytest.raises(InvalidInput) as err:
         glb_from_zip(make())
