@@ -91,7 +91,8 @@ def deformation_series(rest: np.ndarray, faces: np.ndarray, blocks: Iterable[np.
     enclosed = abs(rest_volume) > MIN_ENCLOSED * box
     low, high, vol = [], [], []
     for frames in blocks:
-        ratio = np.linalg.norm(frames[:, e[:, 0]] - frames[:, e[:, 1]], axis=2) / rest_len
+        d = frames[:, e[:, 0]] - frames[:, e[:, 1]]
+        ratio = np.sqrt(np.einsum("tek,tek->te", d, d)) / rest_len
         p = np.nan_to_num(np.percentile(ratio, STRETCH_PERCENTILES, axis=1), nan=np.inf)  # (2, t)
         low.append(p[0])
         high.append(p[1])

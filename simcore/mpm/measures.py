@@ -15,7 +15,11 @@ def signed_volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
     f = np.asarray(frames, dtype=np.float64)
     f = f[None] if f.ndim == 2 else f
     a, b, c = (f[:, faces[:, k]] for k in range(3))
-    return np.einsum("tfi,tfi->t", a, np.cross(b, c)) / 6.0
+    # a · (b × c) by components: np.cross on (T, F, 3) is ~10× slower (it moves the axis first)
+    triple = (a[..., 0] * (b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1])
+              + a[..., 1] * (b[..., 2] * c[..., 0] - b[..., 0] * c[..., 2])
+              + a[..., 2] * (b[..., 0] * c[..., 1] - b[..., 1] * c[..., 0]))
+    return triple.sum(axis=1) / 6.0
 
 
 def chamfer(a: np.ndarray, b: np.ndarray) -> float:
