@@ -23,6 +23,7 @@ from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import ModelUnavailable, learned_summary, learned_weights
 from simcore.skinning.postprocess import smooth_on_surface, top_k
+from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
 from simcore.skinning.quality import quality_scores
 
 Method = Literal["auto", "learned", "geodesic", "heat"]
@@ -105,6 +106,9 @@ def compute_weights(
     v, f = _check_inputs(vertices, faces, skeleton, max_influences)
     mesh = referenced_mesh(v, f)  # vertices no face uses would stretch the voxel grid; they get weights at the end
     v, f = mesh.vertices, mesh.faces
+    on_proxy = len(v) > PROXY_VERTICES  # large meshes: weights on a simplified copy, memory bounded (proxy.py)
+    if on_proxy:
+        v, f = simplified(v, f)
     report = progress or (lambda fraction: None)
     welded = weld_vertices(v, f)
     adj = adjacency(welded.faces, len(welded.vertices))
@@ -146,7 +150,8 @@ def compute_weights(
             tracker.stop.set()  # the other method stops at its next checkpoint instead of running on
             raise
     best = min(chosen, key=lambda name: scores[name]["score"])
-    return SkinningResult(_all_vertices(results[best], mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
+    weights = transfer(results[best], v, mesh.vertices, max_influences) if on_proxy else results[best]
+    return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
 
 
 class _MethodProgress:

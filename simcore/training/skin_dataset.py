@@ -82,7 +82,7 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
             except (SimcoreError, ValueError, np.linalg.LinAlgError) as exc:  # one bad character is skipped, not fatal
                 skipped[name] = f"{type(exc).__name__}: {exc}"[:200]
                 counts["failed"] += 1
-        counts[split] += sum(p.exists() for p in out.glob(f"{split}/{name}_*.npz"))
+        counts[split] += sum(p.exists() for p in paths)
         done += 1
         report(name, done, total)
 
