@@ -149,7 +149,7 @@ def check_refinement(state: "PipelineState", judge: _Judge) -> dict[str, Any] | 
     judge("refine_non_finite_vertices", non_finite, "refine_non_finite",
           lambda v: f"the simulation produced NaN at {v:.0f} vertex-frames (replaced by LBS)")
     judge("refine_tear_radii", tear, "refine_tear",
-          lambda v: f"a vertex moved {v:.2f}× its limb's radius away from its LBS position (torn off)", tear_frame)
+          lambda v: f"a vertex moved {v:.2f}× its limb's radius away from its LBS position", tear_frame)
     judge("refine_det_f_clamped_share", fig["det_f_clamped_share"], "refine_det_f_clamped",
           lambda v: f"the solver rejected {100 * v:.3g} % of particle deformation updates (det F out of range)")
     fig.update(_deformation(judge, series, "refine_"))

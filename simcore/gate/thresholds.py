@@ -19,7 +19,9 @@ THRESHOLDS_PATH = Path(__file__).with_name("thresholds.json")
 FAIL_FACTOR = 1.15  # deviation from rest past the artist envelope that fails a job
 # A float32 row of up to eight weights sums to 1 within eight float32 steps; artists' rigs stay within one.
 ROW_SUM_TOLERANCE = 8 * 2.0 ** -23
-# A vertex refined farther from its LBS position than its limb's radius has left the limb: torn off.
+# A vertex refined farther from its LBS position than its limb's radius may have left the limb: a warning only,
+# as a thin part's jiggle can do it too (the fox's Walk: 2.1 radii with edges and volume within the artists');
+# a tear also stretches edges past the artists' envelope, which fails.
 TEAR_RADII = 1.0
 
 
@@ -52,7 +54,7 @@ def _fixed() -> dict[str, Threshold]:
         "non_finite_weights": Threshold("above", 0, 0),
         "max_row_sum_error": Threshold("above", ROW_SUM_TOLERANCE, ROW_SUM_TOLERANCE),
         "refine_non_finite_vertices": Threshold("above", 0, 0),
-        "refine_tear_radii": Threshold("above", TEAR_RADII, TEAR_RADII),
+        "refine_tear_radii": Threshold("above", TEAR_RADII, None),
         "refine_det_f_clamped_share": Threshold("above", 0, None),
     }
 
