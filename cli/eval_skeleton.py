@@ -53,9 +53,10 @@ def render(report: dict, console: Console) -> None:
 
 def eval_skeleton(
     dir: Annotated[Path, typer.Argument(help="directory of rigged .glb/.gltf files (MANIFEST.tsv optional)")],
-    method: Annotated[str, typer.Option("--method", help="all | voxel | auto | geometric | humanoid")] = "all",
+    method: Annotated[str, typer.Option("--method", help="all | voxel | auto | geometric | humanoid | learned")] = "all",
     json_path: Annotated[Path | None, typer.Option("--json", help="write the report as JSON here")] = None,
     max_joints: Annotated[int, typer.Option("--max-joints", help="joint cap for the predicted methods")] = 64,
+    split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
 ) -> None:
     """Score predicted skeletons against each rig's used skin joints: J2J, J2B, B2B, joint counts, inside share."""
     from simcore.evaluation.skeleton_eval import evaluate_directory
@@ -63,7 +64,7 @@ def eval_skeleton(
     console = Console() if sys.stdout.isatty() else Console(width=170)  # piped output keeps whole rows
     try:
         with console.status("evaluating") as status:
-            evaluation = evaluate_directory(dir, method, max_joints=max_joints,
+            evaluation = evaluate_directory(dir, method, max_joints=max_joints, split=split,
                                             on_asset=lambda name: status.update(f"evaluating {name}"))
     except SimcoreError as exc:
         console.print(f"[red]{exc.code}[/red]: {exc}")

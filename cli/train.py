@@ -1,7 +1,8 @@
-"""`rigforge train data|skin --config CONFIG`: build the learned skinning model's samples, then train it.
+"""`rigforge train data|skin|skeleton-data|skeleton --config CONFIG`: build a learned model's samples, then train it.
 
-CONFIG is a JSON file (simcore/training/configs/skin_cpu.json is the shipped model's): "cache" (sample folder),
-"out" (.safetensors), "log" (JSON lines), "data" (DataConfig) and "train" (TrainConfig) sections. Needs the
+CONFIG is a JSON file (simcore/training/configs/skin_cpu.json and skeleton_cpu.json are the shipped models'):
+"cache" (sample folder), "out" (.safetensors), "log" (JSON lines), "data" and "train" sections (DataConfig and
+TrainConfig for the skinning model, SkeletonDataConfig and SkeletonTrainConfig for the skeleton model). Needs the
 `train` extra (`pip install -e '.[train]'`) for the anny bodies.
 """
 
@@ -17,7 +18,9 @@ from rich.console import Console
 from cli.progress import count_bar
 
 app = typer.Typer(help="Train the learned models.", no_args_is_help=True)
-DEFAULT_CONFIG = Path(__file__).resolve().parent.parent / "simcore" / "training" / "configs" / "skin_cpu.json"
+CONFIGS = Path(__file__).resolve().parent.parent / "simcore" / "training" / "configs"
+DEFAULT_CONFIG = CONFIGS / "skin_cpu.json"
+SKELETON_CONFIG = CONFIGS / "skeleton_cpu.json"
 ConfigOption = Annotated[Path, typer.Option("--config", exists=True, dir_okay=False, help="JSON training config")]
 
 
@@ -60,6 +63,50 @@ def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
     Console().print(f"model card: {card}")
     Console().print(f"best val L1 {summary['val']['l1']:.4f}, deformation {summary['val']['deform']:.5f} at step "
                     f"{summary['best_step']} (start {summary['val_at_start']['l1']:.4f}); {summary['seconds']:.0f} s → {spec['out']}")
+
+
+@app.command("skeleton-data")
+def skeleton_data(config: ConfigOption = SKELETON_CONFIG) -> None:
+    """Build (or complete) the skeleton model's sample cache: points, class and tokens of each augmented character."""
+    from simcore.training.skeleton_dataset import SkeletonDataConfig, build_skeleton_data
+
+    spec = _read(config)
+    with count_bar("samples") as update:
+        summary = build_skeleton_data(SkeletonDataConfig(**spec.get("data", {})), Path(spec["cache"]),
+                                      lambda name, done, total: update(name, done, total))
+    Console().print(f"train samples {summary['train']}, val samples {summary['val']}, failed characters {summary['failed']}")
+    for name, why in summary["skipped"].items():
+        Console().print(f"[yellow]skipped[/] {name}: {why}")
+
+
+@app.command("skeleton")
+def skeleton(config: ConfigOption = SKELETON_CONFIG) -> None:
+    """Train the skeleton-token model on the cache, keep the best `val` state, write the .safetensors and its card."""
+    from simcore.skeleton.learned_model import SkeletonModelConfig
+    from simcore.training.skeleton_card import write_skeleton_card
+    from simcore.training.skeleton_train import SkeletonTrainConfig, train_skeleton
+
+    spec = _read(config)
+    section = dict(spec.get("train", {}))
+    section["model"] = SkeletonModelConfig(**section.get("model", {}))
+    log = Path(spec["log"])
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with count_bar("training") as update:
+        summary = train_skeleton(SkeletonTrainConfig(**section), Path(spec["cache"]), Path(spec["out"]), log,
+                                 lambda step, total, entry: update(_describe_skeleton(entry), step, total))
+    cache = Path(spec["cache"])
+    card = write_skeleton_card(Path(spec["out"]), summary, _read(cache / "summary.json"), _read(cache / "data_config.json"),
+                               f"rigforge train skeleton-data --config {config} && rigforge train skeleton --config {config}")
+    Console().print(f"model card: {card}")
+    Console().print(f"best val NLL {summary['val']['nll']:.4f} (start {summary['val_at_start']['nll']:.4f}), decoded J2J "
+                    f"{summary['val']['j2j']:.4f} at step {summary['best_step']}; {summary['seconds']:.0f} s → {spec['out']}")
+
+
+def _describe_skeleton(entry: dict) -> str:
+    parts = [f"loss {entry['loss']:.4f}"] if "loss" in entry else []
+    if "val" in entry:
+        parts.append(f"val NLL {entry['val']['nll']:.4f}")
+    return ", ".join(parts)
 
 
 def _describe(entry: dict) -> str:

@@ -43,7 +43,7 @@ class RefineOptions(_Strict):
 class JobOptions(_Strict):
     """Everything a job can be asked to do; every field has a working default."""
 
-    skeleton: Literal["auto", "geometric", "humanoid", "keep"] = "auto"
+    skeleton: Literal["auto", "geometric", "humanoid", "learned", "keep"] = "auto"
     max_joints: int = Field(64, ge=2, le=256)
     up_axis: Axis | None = Field(None, description="override the input's up axis (glTF input is +Y up)")
     forward_axis: Axis | None = Field(None, description="override the facing direction used by the humanoid fit")

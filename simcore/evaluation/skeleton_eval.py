@@ -25,7 +25,7 @@ from simcore.metrics.skeleton import INSIDE_RESOLUTION, SkeletonScores, graph_sc
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 
 PREDICTED_METHODS = ("auto", "geometric", "humanoid")
-METHODS = ("all", "voxel", *PREDICTED_METHODS)
+METHODS = ("all", "voxel", *PREDICTED_METHODS, "learned")  # "all" leaves out learned: it needs the trained weights
 __all__ = ["AssetResult", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "read_categories", "resolve_methods"]
 METRIC_KEYS = ("j2j", "j2b", "b2b", "joints_pred", "joints_gt", "joint_ratio", "inside", "seconds")
 
@@ -152,12 +152,13 @@ def evaluate_asset(name: str, category: str, asset: RiggedAsset, methods: list[s
     return rows
 
 
-def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int = 64,
+def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int = 64, split: str | None = None,
                        on_asset: Callable[[str], None] | None = None) -> SkeletonEvaluation:
-    """Evaluate every rigged .glb/.gltf in `directory` with `method` ("all", "voxel", "auto", ...)."""
+    """Evaluate every rigged .glb/.gltf in `directory` with `method` ("all", "voxel", "auto", ...); with `split`,
+    only the files `directory`/MANIFEST.tsv lists for that split (the corpus layout)."""
     methods = resolve_methods(method)
     report = SkeletonEvaluation()
-    for name, category, _, asset in rigged_assets(directory, report.skipped):
+    for name, category, _, asset in rigged_assets(directory, report.skipped, split=split):
         if on_asset is not None:
             on_asset(name)
         try:

@@ -1,4 +1,4 @@
-"""One entry point for skeleton prediction: geometric, humanoid template, or automatic choice."""
+"""One entry point for skeleton prediction: geometric, humanoid template, learned, or automatic choice."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.props import parts_to_try_without
 from simcore.skeleton.types import Skeleton
 
-Method = Literal["auto", "geometric", "humanoid"]
-METHODS: tuple[str, ...] = ("auto", "geometric", "humanoid")
+Method = Literal["auto", "geometric", "humanoid", "learned"]
+METHODS: tuple[str, ...] = ("auto", "geometric", "humanoid", "learned")
 
 
 @dataclass
@@ -53,11 +53,12 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
     faces:    (F, 3) int64 triangles.
     method:   "geometric" (medial skeleton, any shape), "humanoid" (Mixamo template; falls back to geometric
               when no biped is found, saying so in the report) or "auto" (humanoid when an upright biped is
-              detected with confidence, else geometric). A failed humanoid fit is retried without separate
+              detected with confidence, else geometric; never learned) or "learned" (the skeleton-token model,
+              simcore.skeleton.learned; ModelUnavailable when its weights cannot be read). A failed humanoid fit is retried without separate
               parts that may hide the biped (simcore.skeleton.props); the report counts what was left out.
     up_axis / forward_axis: "x", "-x", "y", … overrides for the humanoid fit; None = detect. The geometric method
               uses up_axis (default glTF's +Y) only to tell legs standing on the floor.
-    Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric".
+    Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric" / "learned".
     """
     if method not in METHODS:
         raise InvalidInput(f"unknown skeleton method {method!r}; expected one of {', '.join(METHODS)}",
@@ -69,6 +70,13 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
     v, f = _check_mesh(vertices, faces)
     timings: dict[str, float] = {}
     report: dict[str, Any] = {"requested": method}
+    if method == "learned":  # reads the mesh as glTF's +Y up, the frame it was trained in
+        from simcore.skeleton.learned import learned_skeleton
+
+        started = time.perf_counter()
+        skeleton, report["learned"] = learned_skeleton(v, f, max_joints=max_joints)
+        report["timings_s"] = {"learned": round(time.perf_counter() - started, 3)}
+        return SkeletonPrediction(skeleton, "learned", report)
     parts: list[SurfacePart] | None = None  # connected parts, found once for the retries and the geometric method
     if method in ("auto", "humanoid"):
         from simcore.skeleton.humanoid import fit_humanoid

@@ -27,10 +27,10 @@ CHUNK = 8192  # vertices per forward pass: bounds the (chunk, K, width) activati
 
 
 class ModelUnavailable(SimcoreError):
-    """The learned model's weights cannot be read."""
+    """A learned model's weights cannot be read (`field`: the stage whose model it is)."""
 
-    def __init__(self, message: str):
-        super().__init__(message, code="model_unavailable", field="skinning")
+    def __init__(self, message: str, field: str = "skinning"):
+        super().__init__(message, code="model_unavailable", field=field)
 
 
 def save_model(model: SkinAttention, path: Path, summary: dict) -> None:

@@ -144,9 +144,10 @@ def make_sample(character: Character, rng: np.random.Generator, vertices: int) -
                       moved.astype(np.float32), posed.astype(np.float32), c.category)
 
 
-def variants(character: Character, rng: np.random.Generator, count: int, pose_degrees: float) -> list[Character]:
+def variants(character: Character, rng: np.random.Generator, count: int, pose_degrees: float, *, turn: bool = True) -> list[Character]:
     """`count` augmented copies: the bind pose first, then clip frames (when it has clips) and random poses in
-    turn, every other one subdivided when the mesh is small; each turned and scaled at random."""
+    turn, every other one subdivided when the mesh is small; each turned and scaled at random unless `turn` is
+    False (the skeleton model turns its own, less: its inputs keep the upload's facing)."""
     base = normalised(character)
     out = []
     for k in range(count):
@@ -158,5 +159,5 @@ def variants(character: Character, rng: np.random.Generator, count: int, pose_de
                 c = reposed(base, random_pose(base, rng, pose_degrees))
         if k % 2 == 0 and k > 0 and len(c.vertices) < 20_000:
             c = subdivided(c)
-        out.append(turned(c, rng))
+        out.append(turned(c, rng) if turn else c)
     return out

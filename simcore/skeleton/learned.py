@@ -1,0 +1,111 @@
+"""The `learned` skeleton method: the trained skeleton-token model, decoded best-of-N (weights in the repo).
+
+The model reads `points` surface samples of the mesh (in the token frame, glTF +Y up), then writes candidate
+token sequences under the grammar (never an invalid tree): one greedy sequence per class token (articulation,
+Mixamo, the game-engine humanoid) and the rest sampled. Each candidate is scored without ground truth
+(`simcore.skeleton.candidate_score`) and the best one kept; its joints outside the solid are moved to the
+nearest inside voxel. The weights file is read once per process; a missing or corrupt file raises
+ModelUnavailable with the path and the reason.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import torch
+from safetensors import SafetensorError, safe_open
+from safetensors.torch import load_file, save_file
+
+from simcore.geometry.voxelize import solid_voxels
+from simcore.skeleton.candidate_score import ShapeContext, score_candidate
+from simcore.skeleton.grammar import SkeletonGrammar
+from simcore.skeleton.inside import snap_inside
+from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel
+from simcore.skeleton.shape_points import shape_points, surface_points
+from simcore.skeleton.symmetry import body_mirror
+from simcore.skeleton.token_decoding import decode_tokens
+from simcore.skeleton.tokenizer import SkeletonTokenizer
+from simcore.skeleton.types import Skeleton
+from simcore.skinning.learned import ModelUnavailable
+
+WEIGHTS = Path(__file__).parent / "weights" / "skeleton_tokens.safetensors"
+GREEDY_CLASSES = ("articulation", "mixamo", "vroid")
+TEMPERATURE = 0.8
+SCORE_SAMPLES = 3000  # surface points the reach term is measured on
+SOLID_RESOLUTION = 64
+
+
+def save_skeleton_model(model: SkeletonTokenModel, path: Path, summary: dict) -> None:
+    """Write the state dict as safetensors with the network sizes and `summary` (training and val figures) as
+    JSON metadata; summary["config"]["points"] is the point count inference uses."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    state = {k: v.detach().contiguous() for k, v in model.state_dict().items()}
+    save_file(state, str(path), metadata={"model": json.dumps(model.config.to_dict()), "summary": json.dumps(summary)})
+
+
+@lru_cache(maxsize=4)
+def read_skeleton_metadata(path: Path = WEIGHTS) -> dict[str, dict]:
+    """The file's JSON metadata: "model" (network sizes) and "summary"."""
+    if not path.is_file():
+        raise ModelUnavailable(f"learned skeleton weights not found at {path}", field="skeleton")
+    try:
+        with safe_open(str(path), framework="pt") as fh:
+            meta = fh.metadata() or {}
+        return {key: json.loads(meta[key]) for key in ("model", "summary")}
+    except (SafetensorError, OSError, KeyError, ValueError) as exc:
+        raise ModelUnavailable(f"learned skeleton weights at {path} are unreadable: {type(exc).__name__}: {exc}"[:300],
+                               field="skeleton") from exc
+
+
+@lru_cache(maxsize=4)
+def load_skeleton_model(path: Path = WEIGHTS) -> SkeletonTokenModel:
+    """The model stored at `path`, in eval mode (cached per process)."""
+    sizes = read_skeleton_metadata(path)["model"]
+    try:
+        model = SkeletonTokenModel(SkeletonModelConfig(**sizes))
+        model.load_state_dict(load_file(str(path)))
+    except (SafetensorError, OSError, RuntimeError, TypeError) as exc:
+        raise ModelUnavailable(f"learned skeleton weights at {path} do not fit the model: {type(exc).__name__}: {exc}"[:300],
+                               field="skeleton") from exc
+    model.eval()
+    return model
+
+
+def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = 8, seed: int = 0,
+                     model_path: Path | None = None) -> tuple[Skeleton, dict]:
+    """The best of `candidates` decoded skeletons for a mesh (vertices (V, 3) metres, +Y up; faces (F, 3)), in the
+    mesh's frame, and a report: each candidate's class and scores, the chosen one, joints moved inside.
+    model_path: the weights file (None = the shipped WEIGHTS)."""
+    model_path = WEIGHTS if model_path is None else model_path
+    model = load_skeleton_model(model_path)
+    points = int(read_skeleton_metadata(model_path)["summary"]["config"]["points"])
+    rng = np.random.default_rng(seed)
+    cloud, norm = shape_points(vertices, faces, points, rng)
+    grammar = SkeletonGrammar(max_length=model.config.max_tokens, max_joints=max_joints)
+    classes = list(GREEDY_CLASSES[:candidates])
+    sampled = [GREEDY_CLASSES[k % len(GREEDY_CLASSES)] for k in range(max(0, candidates - len(classes)))]
+    generator = torch.Generator().manual_seed(seed)
+    tensor = torch.from_numpy(cloud)
+    decoded = decode_tokens(model, tensor, classes, grammar)
+    if sampled:
+        decoded += decode_tokens(model, tensor, sampled, grammar, temperature=TEMPERATURE, generator=generator)
+    size = float(np.ptp(vertices, axis=0).max())
+    shape = ShapeContext(solid_voxels(vertices, faces, resolution=SOLID_RESOLUTION),
+                         surface_points(vertices, faces, SCORE_SAMPLES, rng)[0], body_mirror(vertices), size)
+    tokenizer = SkeletonTokenizer(max_length=model.config.max_tokens)
+    skeletons = [tokenizer.decode(tokens, norm) for tokens, _ in decoded]
+    scores = [score_candidate(s, shape, log_prob) for s, (_, log_prob) in zip(skeletons, decoded)]
+    best = int(np.argmax([s.total for s in scores]))
+    chosen = skeletons[best]
+    snapped = snap_inside(shape.grid, chosen.positions)
+    moved = int(np.count_nonzero(np.any(snapped != chosen.positions, axis=1)))
+    chosen = Skeleton(snapped, chosen.parents, chosen.names, chosen.kinds)
+    report = {
+        "chosen": best, "joints": chosen.num_joints, "moved_inside": moved, "symmetric": shape.mirror is not None,
+        "candidates": [{"class": c, "joints": s.num_joints, **sc.to_dict()}
+                       for c, s, sc in zip(classes + sampled, skeletons, scores)],
+    }
+    return chosen, report

@@ -1,0 +1,152 @@
+"""`rigforge train skeleton-data`: the learned skeleton model's samples, cached as .npz.
+
+Same characters and augmentations as the skinning model's data (`skin_dataset.corpus_characters`,
+`anny_bodies`, `skin_samples.variants`): corpus `train` (re-posed by its clips and random poses, subdivided),
+corpus `val` as it comes (bind pose), anny bodies (train only). The skeleton model keeps the upload's facing,
+so variants are turned by at most ±`turn_degrees` about up instead of a full turn (scale does not matter: the
+tokens are normalised). A sample is `points` surface points with normals in the token frame, the class token
+and the token sequence of the character's used skin joints (those the evaluation scores against).
+
+Classes (the vocabulary's four UniRig slots): `mixamo` for a skeleton whose body matches the Mixamo template
+(anny's Mixamo rig, Mixamo-named corpus rigs), `vroid` for anny's game-engine rig (the second humanoid
+convention takes UniRig's other humanoid slot), `articulation` for every other corpus rig.
+Deterministic by seed: character i of a source draws from default_rng([seed, source, i]).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from simcore.errors import SimcoreError
+from simcore.io.gltf_rig import used_joints
+from simcore.metrics.skeleton import used_skeleton
+from simcore.skeleton.shape_points import shape_points
+from simcore.skeleton.tokenizer import SkeletonTokenizer
+from simcore.skeleton.types import Skeleton
+from simcore.training.skin_dataset import corpus_characters
+from simcore.training.skin_samples import Character, normalised, variants
+
+GAME_ENGINE_PREFIX = "anny_game_engine"  # anny_bodies names each body after its rig
+
+
+@dataclass(frozen=True)
+class SkeletonDataConfig:
+    """What `rigforge train skeleton-data` builds (the JSON config's "data" section)."""
+
+    corpus: str = "../shared/corpus"
+    variants: int = 8  # augmented copies of each training character
+    anny_bodies: int = 64
+    anny_variants: int = 3
+    points: int = 4096  # surface points kept per sample (training draws a subset each step)
+    pose_degrees: float = 35.0
+    turn_degrees: float = 30.0  # largest turn about up either way
+    max_tokens: int = 512
+    seed: int = 0
+
+
+@dataclass
+class SkeletonSample:
+    """points (P, 6) float32 token-frame points and normals; tokens (L,) int64; joints (J, 3) float32 the target
+    joints in the token frame (for decoded J2J); category of the character."""
+
+    points: np.ndarray
+    tokens: np.ndarray
+    joints: np.ndarray
+    category: str
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Flat name → array mapping for np.savez."""
+        return {"points": self.points.astype(np.float16), "tokens": self.tokens, "joints": self.joints,
+                "category": np.array(self.category)}
+
+    @staticmethod
+    def from_arrays(data: dict[str, np.ndarray]) -> "SkeletonSample":
+        return SkeletonSample(data["points"].astype(np.float32), data["tokens"].astype(np.int64),
+                              data["joints"].astype(np.float32), str(data["category"]))
+
+
+def target_skeleton(character: Character) -> Skeleton:
+    """The character's skin joints that influence vertices (or have a descendant that does): the eval's ground truth."""
+    return used_skeleton(character.skeleton, used_joints(character.skeleton, character.weights))
+
+
+def skeleton_class(character: Character, skeleton: Skeleton, tokenizer: SkeletonTokenizer) -> str:
+    """The class token's name for a character's skeleton (see the module docstring)."""
+    if tokenizer.templates(skeleton)[0]:
+        return "mixamo"
+    return "vroid" if character.name.startswith(GAME_ENGINE_PREFIX) else "articulation"
+
+
+def upright_turned(character: Character, rng: np.random.Generator, degrees: float) -> Character:
+    """The character turned about +Y by a random angle in ±degrees."""
+    m = Rotation.from_euler("y", rng.uniform(-degrees, degrees), degrees=True).as_matrix()
+    skeleton = Skeleton(character.skeleton.positions @ m.T, character.skeleton.parents, character.skeleton.names)
+    return Character(character.name, character.category, character.vertices @ m.T, character.faces, skeleton, character.weights)
+
+
+def make_skeleton_sample(character: Character, rng: np.random.Generator, points: int, tokenizer: SkeletonTokenizer) -> SkeletonSample:
+    """Points, class and tokens of one (augmented) character."""
+    skeleton = target_skeleton(character)
+    cloud, norm = shape_points(character.vertices, character.faces, points, rng)
+    tokens = tokenizer.encode(skeleton, norm, cls=skeleton_class(character, skeleton, tokenizer))
+    joints = tokenizer.model_frame(norm.to_unit(skeleton.positions)).astype(np.float32)
+    return SkeletonSample(cloud, tokens, joints, character.category)
+
+
+def _save(path: Path, sample: SkeletonSample) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez(tmp, **sample.arrays())
+    tmp.replace(path)
+
+
+def build_skeleton_data(config: SkeletonDataConfig, out: Path, report: Callable[[str, int, int], None]) -> dict:
+    """Write out/train/*.npz and out/val/*.npz; report(name, done, total) after each character. Returns counts."""
+    from simcore.training.anny_bodies import anny_bodies
+
+    tokenizer = SkeletonTokenizer(max_length=config.max_tokens)
+    root = Path(config.corpus)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "data_config.json").write_text(json.dumps(asdict(config), indent=2))
+    skipped: dict[str, str] = {}
+    counts = {"train": 0, "val": 0, "failed": 0}
+    train = list(corpus_characters(root, "train", skipped))
+    val = list(corpus_characters(root, "val", skipped))
+    total = len(train) + len(val) + config.anny_bodies
+    done = 0
+
+    def emit(split: str, name: str, make: Callable[[], list[Character]], rng: np.random.Generator) -> None:
+        nonlocal done
+        if not (out / split / f"{name}_00.npz").exists():
+            try:
+                for k, c in enumerate(make()):
+                    _save(out / split / f"{name}_{k:02d}.npz", make_skeleton_sample(c, rng, config.points, tokenizer))
+            except (SimcoreError, ValueError, np.linalg.LinAlgError) as exc:  # one bad character is skipped, not fatal
+                skipped[name] = f"{type(exc).__name__}: {exc}"[:200]
+                counts["failed"] += 1
+        counts[split] += sum(1 for _ in out.glob(f"{split}/{name}_*.npz"))
+        done += 1
+        report(name, done, total)
+
+    def augmented(c: Character, rng: np.random.Generator, count: int) -> list[Character]:
+        return [upright_turned(v, rng, config.turn_degrees) for v in variants(c, rng, count, config.pose_degrees, turn=False)]
+
+    for i, c in enumerate(train):
+        rng = np.random.default_rng([config.seed, 0, i])
+        emit("train", c.name, lambda c=c, rng=rng: augmented(c, rng, config.variants), rng)
+    for i, c in enumerate(val):
+        rng = np.random.default_rng([config.seed, 1, i])
+        emit("val", c.name, lambda c=c: [normalised(c)], rng)
+    bodies = anny_bodies(config.anny_bodies, np.random.default_rng([config.seed, 2])) if config.anny_bodies else iter(())
+    for i, c in enumerate(bodies):
+        rng = np.random.default_rng([config.seed, 3, i])
+        emit("train", c.name, lambda c=c, rng=rng: augmented(c, rng, config.anny_variants), rng)
+    summary = {**counts, "skipped": skipped}
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary

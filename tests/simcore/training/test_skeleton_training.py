@@ -1,0 +1,91 @@
+"""The learned skeleton model learns a generated creature, always decodes to a valid tree, and refuses bad weights."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import torch
+
+from simcore.geometry.capsule_creatures import quadruped
+from simcore.skeleton.grammar import SkeletonGrammar
+from simcore.skeleton.learned import learned_skeleton, load_skeleton_model
+from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel, sequence_slots
+from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.token_decoding import decode_tokens
+from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
+from simcore.skinning.learned import ModelUnavailable
+from simcore.training.skeleton_dataset import _save, make_skeleton_sample, upright_turned
+from simcore.training.skeleton_train import SkeletonTrainConfig, train_skeleton
+from simcore.training.skin_samples import Character, normalised, variants
+
+TINY = SkeletonModelConfig(width=32, heads=2, encoder_layers=1, decoder_layers=2, queries=32, max_tokens=128, frequencies=4)
+
+
+def _creature() -> Character:
+    """The capsule dog, each capsule bound to the joint its bone starts at."""
+    vertices, faces, skeleton = quadruped(count=8)
+    per = len(vertices) // len(skeleton.bones())
+    owner = np.repeat(skeleton.bones()[:, 0], per)
+    weights = sp.csr_matrix((np.ones(len(vertices)), (np.arange(len(vertices)), owner)), shape=(len(vertices), skeleton.num_joints))
+    return Character("dog", "quadruped", vertices, faces, skeleton, weights)
+
+
+def test_tiny_model_lowers_its_loss_and_ships_a_loadable_file(tmp_path: Path) -> None:
+    creature = _creature()
+    rng = np.random.default_rng(0)
+    tokenizer = SkeletonTokenizer(max_length=TINY.max_tokens)
+    for k, c in enumerate(variants(creature, rng, 3, 20.0, turn=False)):
+        _save(tmp_path / "data" / "train" / f"dog_{k}.npz", make_skeleton_sample(upright_turned(c, rng, 20.0), rng, 512, tokenizer))
+    _save(tmp_path / "data" / "val" / "dog.npz", make_skeleton_sample(normalised(creature), rng, 512, tokenizer))
+    config = SkeletonTrainConfig(steps=60, batch=3, points=256, lr=3e-3, val_every=30, decode_every=60, decode_val=1,
+                                 log_every=10, threads=1, model=TINY)
+    out = tmp_path / "skeleton.safetensors"
+    summary = train_skeleton(config, tmp_path / "data", out, tmp_path / "log.jsonl", lambda step, total, entry: None)
+    assert summary["val"]["nll"] < summary["val_at_start"]["nll"] - 1.0
+    assert len((tmp_path / "log.jsonl").read_text().splitlines()) >= 6
+    skeleton, report = learned_skeleton(creature.vertices, creature.faces, candidates=4, model_path=out)
+    assert skeleton.validate().num_joints == report["joints"] and len(report["candidates"]) == 4
+
+
+def test_untrained_model_decodes_valid_trees_within_the_caps() -> None:
+    torch.manual_seed(0)
+    model = SkeletonTokenModel(TINY).eval()
+    grammar = SkeletonGrammar(max_length=TINY.max_tokens, max_joints=30)
+    points = torch.rand(200, 6) * 2 - 1
+    tokenizer = SkeletonTokenizer(max_length=TINY.max_tokens)
+    decoded = decode_tokens(model, points, ["articulation", "mixamo", "vroid", "none"], grammar,
+                            temperature=1.5, generator=torch.Generator().manual_seed(1))
+    for tokens, log_prob in decoded:
+        assert grammar.run(tokens).complete and len(tokens) <= TINY.max_tokens and np.isfinite(log_prob)
+        skeleton = tokenizer.decode(tokens, Normalization(np.zeros(3), 1.0))
+        assert 1 <= skeleton.validate().num_joints <= 30
+
+
+def test_slots_name_each_next_coordinate() -> None:
+    vertices, faces, skeleton = quadruped(count=6)
+    tokens = SkeletonTokenizer().encode(skeleton, Normalization.from_points(vertices))
+    slots = sequence_slots(tokens, SkeletonGrammar())
+    assert slots[1] == 0 and list(slots[2:4]) == [1, 2]  # after <cls> x comes y, then z
+    assert set(slots.tolist()) <= {0, 1, 2, 3, 4, 5, 6}  # no template joints in a dog
+
+
+@pytest.mark.parametrize("content", [None, b"not a safetensors file"])
+def test_missing_or_corrupt_weights_raise_a_clear_error(tmp_path: Path, content: bytes | None) -> None:
+    path = tmp_path / "skeleton.safetensors"
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(ModelUnavailable) as err:
+        load_skeleton_model(path)
+    assert err.value.code == "model_unavailable" and err.value.field == "skeleton" and str(path) in str(err.value)
+
+
+def test_learned_method_without_weights_is_a_clear_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import simcore.skeleton.learned as learned
+
+    monkeypatch.setattr(learned, "WEIGHTS", tmp_path / "absent.safetensors")
+    vertices, faces, _ = quadruped(count=6)
+    with pytest.raises(ModelUnavailable):
+        predict_skeleton(vertices, faces, method="learned")
