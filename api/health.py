@@ -1,4 +1,4 @@
-"""/healthz (process up) and /readyz (database, broker and storage reachable)."""
+"""/healthz (process up) and /readyz (database, broker and storage reachable; the embedded worker alive)."""
 
 from __future__ import annotations
 
@@ -47,5 +47,9 @@ def readyz() -> JSONResponse:
             checks[name] = "ok"
         except Exception as exc:  # noqa: BLE001 - report any failure as not ready
             checks[name] = f"error: {type(exc).__name__}: {exc}"[:300]
+    from worker.embedded import active
+
+    if (embedded := active()) is not None:  # `rigforge serve` supervising its own worker
+        checks["worker"] = embedded.status()
     ready = all(v == "ok" for v in checks.values())
     return JSONResponse({"status": "ready" if ready else "not_ready", "checks": checks}, status_code=200 if ready else 503)

@@ -20,6 +20,9 @@ class JobSettings(BaseModel):
     time_limit: int = Field(3600, gt=0, description="seconds before the worker process running a job is killed")
     reconcile_seconds: float = Field(15.0, gt=0, description="period of the reconciler that re-queues lost jobs")
     requeue_after_seconds: float = Field(120.0, gt=0, description="re-send a queued job whose message may be lost")
+    worker_stall_seconds: float = Field(60.0, gt=0, description="serve restarts its embedded worker when a job waits queued this "
+                                        "long with none running")
+    worker_check_seconds: float = Field(5.0, gt=0, description="how often serve checks its embedded worker")
 
 
 class Settings(BaseSettings):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import signal
-import subprocess
 import sys
 from typing import Annotated
 
@@ -52,23 +51,6 @@ def worker(
     ])
 
 
-def _die_with_parent() -> None:
-    """In the child: get SIGTERM when the parent dies (uvicorn re-raises SIGTERM, skipping `finally`)."""
-    import ctypes
-
-    ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # 1 = PR_SET_PDEATHSIG
-
-
-def _stop(child: subprocess.Popen, grace: float = 15.0) -> None:
-    if child.poll() is None:
-        child.send_signal(signal.SIGTERM)
-        try:
-            child.wait(grace)
-        except subprocess.TimeoutExpired:
-            child.kill()
-            child.wait()
-
-
 def serve(
     host: Annotated[str | None, typer.Option(help="bind address (default RIGFORGE_HOST or 127.0.0.1)")] = None,
     port: Annotated[int | None, typer.Option(help="port (default RIGFORGE_PORT or 8000)")] = None,
@@ -82,15 +64,19 @@ def serve(
     secret = ensure_local_key()
     if secret:
         typer.echo(f"local API key (also in {settings.local_key_file}): {secret}")
-    child = None
+    embedded = None
     if not no_worker:
-        child = subprocess.Popen([sys.executable, "-m", "cli.main", "worker"], start_new_session=True,
-                                 preexec_fn=_die_with_parent)
+        from worker.embedded import EmbeddedWorker
+
+        embedded = EmbeddedWorker(settings)
+        embedded.start()
+    # uvicorn re-raises SIGTERM after its shutdown with our handler restored: exit through `finally`.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     try:
         uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
                     log_level="info", timeout_graceful_shutdown=5)
     except KeyboardInterrupt:  # Ctrl-C: uvicorn re-raises SIGINT after its graceful shutdown
         pass
     finally:
-        if child is not None:
-            _stop(child)
+        if embedded is not None:
+            embedded.stop()

@@ -26,6 +26,9 @@ def run_job(job_id: str) -> str:
 @worker_ready.connect
 def _start_reconciler(**_: object) -> None:
     global _reconciler
+    from worker.embedded import ready_file
+
+    ready_file(get_settings(), os.getpid()).touch()  # tells a supervising `serve` this worker consumes
     _reconciler = Reconciler(get_settings())
     _reconciler.start()
 
