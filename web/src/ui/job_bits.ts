@@ -12,7 +12,7 @@ export function warningsBadge(job: Job): HTMLElement | null {
   const n = job.warnings.length;
   if (!n) return null;
   const hard = job.warnings.some((w) => w.hard);
-  return h("span", { class: `badge warnings${hard ? " hard" : ""}`, "data-warnings": String(n),
+  return h("span", { class: `warn-badge${hard ? " hard" : ""}`, "data-warnings": String(n),
     title: job.warnings.map((w) => `${w.stage}: ${w.message}`).join("\n") }, `${n} warning${n > 1 ? "s" : ""}`);
 }
 
