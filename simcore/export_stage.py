@@ -2,7 +2,8 @@
 
 Writes into state.workdir and state.artifacts:
   rigged.glb, rigged.usdc, rigged.usdz         always (needs state.mesh, state.skeleton, state.weights)
-  animated.glb, animated.usdc                  when state.animation is set
+  texture_<i>.png|jpg                          the upload's images, which the .usdc files' materials reference
+  animated.glb, animated.usdc, animated.usdz   when state.animation is set
   refined.glb, refined.usdc                    when state.refined_frames is set (frames of that animation)
 Every GLB goes through the Khronos validator and every USD through usd-core's compliance checker;
 results land in report["validation"]. A file with validator errors fails the job (code
@@ -59,7 +60,8 @@ def _write_usds(state: "PipelineState", progress: "StageProgress") -> list[Path]
     if state.animation is not None:
         progress.check_cancel()
         written += write_usd_skel(state.mesh.glb, state.skeleton, state.weights, state.workdir / "animated.usdc",
-                                  max_influences=k, animation=state.animation)
+                                  max_influences=k, animation=state.animation,
+                                  usdz_path=state.workdir / "animated.usdz")
         if state.refined_frames is not None:
             progress.check_cancel()
             written += write_usd_skel(state.mesh.glb, state.skeleton, state.weights, state.workdir / "refined.usdc",
@@ -68,7 +70,7 @@ def _write_usds(state: "PipelineState", progress: "StageProgress") -> list[Path]
     for path in written:
         state.artifacts[path.name] = path
     progress(0.7)
-    return written
+    return sorted({p for p in written if p.suffix.startswith(".usd")})
 
 
 def _validate(state: "PipelineState", glbs: list[Path], usds: list[Path]) -> None:

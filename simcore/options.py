@@ -19,7 +19,8 @@ class MotionOptions(_Strict):
     clip: str | int | None = Field(None, description="clip name or index in the motion file (or in the mesh upload)")
     joint_map: dict[str, str] = Field(default_factory=dict, description="source joint name → target joint name overrides")
     in_place: bool = Field(False, description="remove root horizontal translation")
-    fps: float | None = Field(None, gt=0, le=240, description="resample to this frame rate (default: the clip's)")
+    fps: float | None = Field(None, gt=0, le=240, description="resample to this frame rate (default: the clip's), "
+                              "rounded to a whole number: USD and FBX count whole frames per second")
     start: float | None = Field(None, ge=0, description="clip start time, seconds")
     end: float | None = Field(None, gt=0, description="clip end time, seconds")
     loop: bool = False

@@ -4,6 +4,7 @@ Layout written (metersPerUnit 1, upAxis Y, defaultPrim /Character):
   /Character                SkelRoot
   /Character/Skeleton       Skeleton: joints (USD-safe unique names as paths), bindTransforms, restTransforms
   /Character/Animation      SkelAnimation (animated/refined only), the Skeleton's skel:animationSource
+  /Character/Materials/<m>  UsdPreviewSurface per glTF material; textures written beside the file (usd_materials)
   /Character/Geometry/<m>   Mesh per glTF triangle primitive: points, faceVertexIndices, normals, primvars:st,
                             primvars:skel:jointIndices/jointWeights (elementSize = influences), geomBindTransform
 Refined files keep the skeleton and its animation but write the meshes' simulated positions as
@@ -25,6 +26,7 @@ from simcore.errors import InvalidInput
 from simcore.io.gltf_rig import primitive_triangles
 from simcore.io.mesh_layout import MeshLayout, read_mesh_layout
 from simcore.io.skin_influences import Influences, top_influences
+from simcore.io.usd_materials import bind_material, define_materials, write_texture_files
 from simcore.skeleton.kinematics import bind_matrices, rest_local_matrices
 from simcore.skeleton.types import Skeleton
 
@@ -72,8 +74,9 @@ def _base_color(doc, prim: dict) -> list[float] | None:
     return [float(c) for c in factor[:3]] if factor else None
 
 
-def _define_meshes(stage, layout: MeshLayout, infl: Influences | None, skel_path: str | None) -> list:
-    """One UsdGeom.Mesh per triangle primitive; returns [(mesh, vertex slice)]."""
+def _define_meshes(stage, layout: MeshLayout, infl: Influences | None, skel_path: str | None,
+                   materials: list) -> list:
+    """One UsdGeom.Mesh per triangle primitive, bound to its material; returns [(mesh, vertex slice)]."""
     from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
 
     doc, taken, out = layout.doc, set(), []
@@ -105,6 +108,8 @@ def _define_meshes(stage, layout: MeshLayout, infl: Influences | None, skel_path
         color = _base_color(doc, prim)
         if color is not None:
             mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set(Vt.Vec3fArray([Gf.Vec3f(*color)]))
+        if isinstance(prim.get("material"), int) and 0 <= prim["material"] < len(materials):
+            bind_material(mesh, materials[prim["material"]])
         if infl is not None and skel_path is not None:
             binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
             binding.CreateSkeletonRel().SetTargets([Sdf.Path(skel_path)])
@@ -154,7 +159,7 @@ def _define_animation(stage, skeleton: Skeleton, joints: list[str], animation: "
         q = tracks.rotations[t]
         rot_attr.Set(Vt.QuatfArray([Gf.Quatf(float(w), float(x), float(y), float(z)) for x, y, z, w in q]), t)
         trans_attr.Set(Vt.Vec3fArray.FromNumpy(tracks.translations[t].astype(np.float32)), t)
-    stage.SetTimeCodesPerSecond(float(animation.fps))
+    stage.SetTimeCodesPerSecond(float(animation.fps))  # the motion stage makes it a whole number
     stage.SetFramesPerSecond(float(animation.fps))
     stage.SetStartTimeCode(0)
     stage.SetEndTimeCode(max(len(tracks.times) - 1, 0))
@@ -178,7 +183,8 @@ def write_usd_skel(
     animation:      clip bound as the Skeleton's animationSource (time code k = frame k, at its fps).
     refined_frames: (T, V, 3) float world positions at animation frames 0..T-1; written as time-sampled
                     points on unbound meshes (needs `animation` for the time base).
-    Returns the written paths.
+    Returns the written paths: the USD files, then the texture files (texture_<i>.png|jpg) beside them that
+    the .usdc references and the .usdz holds.
     """
     from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 
@@ -211,7 +217,11 @@ def write_usd_skel(
         anim_path = _define_animation(stage, skeleton, joints, animation)
         UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([Sdf.Path(anim_path)])
     bound = refined_frames is None
-    meshes = _define_meshes(stage, layout, infl if bound else None, str(skel.GetPath()) if bound else None)
+    out_path = Path(out_path)
+    textures = write_texture_files(layout.doc, out_path.parent)
+    materials = define_materials(stage, layout.doc, ROOT, textures)
+    meshes = _define_meshes(stage, layout, infl if bound else None, str(skel.GetPath()) if bound else None,
+                            materials)
     if refined_frames is not None:
         for mesh, rows in meshes:
             attr = mesh.GetPointsAttr()
@@ -219,7 +229,6 @@ def write_usd_skel(
                 attr.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(frame[rows])), t)
             lo, hi = refined_frames[:, rows].min((0, 1)), refined_frames[:, rows].max((0, 1))
             mesh.GetExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))
-    out_path = Path(out_path)
     out_path.unlink(missing_ok=True)
     stage.GetRootLayer().Export(str(out_path))
     written = [out_path]
@@ -228,4 +237,4 @@ def write_usd_skel(
         if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(out_path)), str(usdz_path)):
             raise InvalidInput(f"could not package {out_path.name} as usdz", code="export_failed", field="usdz")
         written.append(Path(usdz_path))
-    return written
+    return written + [out_path.parent / t.name for t in textures.values()]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from simcore.errors import InvalidInput
@@ -97,12 +99,21 @@ def sample_track(
     return values[k] + u[:, None] * (values[k + 1] - values[k])
 
 
+def whole_rate(fps: float) -> float:
+    """The nearest whole number of frames per second (at least 1): USD time codes and FBX frames count whole
+    frames per second, and a file's 120.00048 (a BVH frame time of 0.0083333 s) is 120."""
+    return float(max(1, round(fps)))
+
+
 def resample(anim: JointAnimation, fps: float | None = None, start: float | None = None, end: float | None = None) -> JointAnimation:
-    """Cut to [start, end] seconds and resample at `fps` (default: the clip's own rate); slerp rotations.
+    """Cut to [start, end] seconds and resample at `fps` (default: the clip's own rate), rounded to a whole
+    rate; slerp rotations. A clip within 0.1 % of that rate (a rounded frame time) keeps its frames.
 
     Raises InvalidInput(field="motion.start") when the range holds no time.
     """
-    fps = float(fps or anim.fps)
+    fps = whole_rate(fps or anim.fps)
+    if fps != anim.fps and abs(fps - anim.fps) <= 1e-3 * fps:
+        anim = replace(anim, fps=fps)
     t0 = 0.0 if start is None else float(start)
     t1 = anim.duration if end is None else min(float(end), anim.duration)
     if t0 > t1 or t0 > anim.duration:
