@@ -111,18 +111,18 @@ def main() -> None:
 
     python, peer = _blender()
     rows = []
-    for name, _category, _doc, asset in rigged_assets(Path(args.assets)):
+    for name, _category, doc, asset in rigged_assets(Path(args.assets)):
         s = asset.skeleton
         ours, theirs, blender_calls = [], [], []
         with tempfile.TemporaryDirectory() as tmp:
             job, blender_job, out = Path(tmp) / "job.npz", Path(tmp) / "blender_job.npz", Path(tmp) / "out.npz"
             np.savez(job, vertices=asset.vertices, faces=asset.faces, positions=s.positions, parents=s.parents, names=np.array(s.names))
             if python is not None:
-                peer.write_job(asset, blender_job)
+                peer.write_job(asset, blender_job, next(Path(args.assets).glob(f"{name}.gl*")), doc)
             for _ in range(args.repeats):  # alternate, so drift on this VM hits both tools alike
                 ours.append(_ours_process(job, out))
                 if python is not None:
-                    wall, error = peer.run_job(python, blender_job, out)
+                    wall, error, _output = peer.run_job(python, blender_job, out)
                     if error is None:
                         theirs.append(wall)
                         blender_calls.append(float(np.load(out)["seconds"]))

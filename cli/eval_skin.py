@@ -15,7 +15,7 @@ from cli.eval_output import print_table_and_problems, write_report_json
 from rich.console import Console
 from rich.table import Table
 
-from simcore.evaluation.skin_eval import OUR_METHODS, SkinEvaluation, evaluate_skinning
+from simcore.evaluation.skin_eval import OUR_METHODS, SkinEvaluation, SkinRow, evaluate_skinning
 
 DEFAULT_PEERS = Path("bench/results/peers")
 
@@ -37,6 +37,13 @@ def _cells(metrics: dict) -> list[str]:
     ]
 
 
+def _peer_mark(row: SkinRow) -> str:
+    """" (failed 100%)" / " (partial 12%)" after a peer's method name: its solve status, vertices unweighted."""
+    if row.status in (None, "ok") or row.error:
+        return ""
+    return f" ({row.status} {row.unweighted_share or 0:.0%})"
+
+
 def render(report: SkinEvaluation, console: Console) -> None:
     """Each asset's methods on consecutive rows (ours beside Blender's), then per-method means (all, then per category)."""
     table = Table(title="Skin-only on the assets' own skeletons; deformation in unit-cube units (random poses | own clips)")
@@ -49,7 +56,7 @@ def render(report: SkinEvaluation, console: Console) -> None:
         rows = [r for r in report.rows if r.name == name]
         for i, r in enumerate(rows):
             first = i == 0
-            label = r.method + (f" → {r.chosen}" if r.chosen else "")
+            label = r.method + (f" → {r.chosen}" if r.chosen else "") + _peer_mark(r)
             cells = ["error"] + [""] * 7 if r.error else _cells(r.metrics)
             table.add_row(name if first else "", r.category if first else "", label, *cells, end_section=i == len(rows) - 1)
     categories = sorted({r.category for r in report.rows})
@@ -58,6 +65,13 @@ def render(report: SkinEvaluation, console: Console) -> None:
         for i, m in enumerate(report.methods()):
             table.add_row(title if i == 0 else "", "", m, *_cells(report.mean(m, subset)), style="bold",
                           end_section=i == len(report.methods()) - 1)
+    for peer, means in report.peer_means().items():  # peers with and without failed/partial solves, ours on the same assets
+        scored = means["ok"] + means["partial"] + means["failed"]
+        for title, key, count in ((f"MEAN ({peer} scored: {means['failed']} failed, {means['partial']} partial)", "scored", scored),
+                                  (f"MEAN ({peer} solved)", "solved", means["ok"])):
+            for i, m in enumerate(report.methods()):
+                table.add_row(title if i == 0 else "", f"{count} assets" if i == 0 else "", m, *_cells(means[key][m]),
+                              style="bold", end_section=i == len(report.methods()) - 1)
     print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.method}: {r.error}" for r in report.rows if r.error))
 
 

@@ -5,7 +5,9 @@ and names kept) and compared with the artist's weights: avg L1, support precisio
 deformation protocol of `simcore.metrics.skinning` (8 seeded random poses, unit-cube units). A second
 deformation column poses the mesh with the asset's own animation clips where it has them (every clip,
 sampled at CLIP_FPS, at most CLIP_FRAMES frames each). Peer weights (e.g. Blender's, written by
-bench/peers/blender_weights.py as PEERS/<peer>/<asset>.npz) are scored the same way, row by row.
+bench/peers/blender_weights.py as PEERS/<peer>/<asset>.npz) are scored the same way, row by row; a peer row
+carries its solve status (`ok`, `partial`: some vertices left unweighted, `failed`: no solution; `error`: not
+run), and `peer_means` sets each peer beside our methods on the same assets, with and without failed solves.
 
 Full-pipeline rows (`pipeline=True`, method "pipeline"): our predicted skeleton + our weights. Each of our
 joints is matched to the weight-bearing artist joint whose bones lie nearest to its own bone midpoints and
@@ -35,6 +37,8 @@ from simcore.skinning.predict import compute_weights
 OUR_METHODS = ("auto", "learned", "geodesic", "heat")
 CLIP_FPS = 10.0
 CLIP_FRAMES = 60
+PEER_STATUSES = ("ok", "partial", "failed")
+UNWEIGHTED = 1e-6  # a vertex whose peer weights sum to no more than this has none
 ROW_KEYS = ("l1", "precision", "recall", "deform_mean", "deform_p95", "clip_deform_mean", "clip_deform_p95", "seconds")
 
 
@@ -49,6 +53,8 @@ class SkinRow:
     chosen: str | None = None  # the method `auto` picked
     error: str | None = None
     note: str | None = None
+    status: str | None = None  # a peer's solve: ok, partial, failed (PEER_STATUSES)
+    unweighted_share: float | None = None  # a peer's vertices left without weight
 
     def to_dict(self) -> dict:
         out: dict = {"name": self.name, "category": self.category, "method": self.method}
@@ -59,6 +65,9 @@ class SkinRow:
             out["error"] = self.error
         if self.note:
             out["note"] = self.note
+        if self.status:
+            out["status"] = self.status
+            out["unweighted_share"] = None if self.unweighted_share is None else round(self.unweighted_share, 4)
         return out
 
 
@@ -79,11 +88,25 @@ class SkinEvaluation:
             out[key] = round(float(np.mean(vals)), 6) if vals else None
         return out
 
+    def peer_means(self) -> dict[str, dict]:
+        """Per peer: its solve counts and every method's mean over the assets the peer scored ("scored", failed
+        and partial solves included) and over those it solved cleanly ("solved"), ours beside it on the same assets."""
+        out = {}
+        for peer in dict.fromkeys(r.method for r in self.rows if r.status is not None):
+            rows = [r for r in self.rows if r.method == peer]
+            counts = {s: sum(r.status == s for r in rows) for s in PEER_STATUSES + ("error",)}
+            scored = {r.name for r in rows if r.error is None}
+            solved = {r.name for r in rows if r.error is None and r.status == "ok"}
+            out[peer] = {**counts, "scored": {m: self.mean(m, scored) for m in self.methods()},
+                         "solved": {m: self.mean(m, solved) for m in self.methods()}}
+        return out
+
     def to_dict(self) -> dict:
-        """{"assets": [row...], "mean": {method: {...}}, "skipped": {...}} (the issue's JSON format)."""
+        """{"assets": [row...], "mean": {method: {...}}, "peer_means": {...}, "skipped": {...}} (the issue's JSON format)."""
         return {
             "assets": [r.to_dict() for r in self.rows],
             "mean": {m: self.mean(m) for m in self.methods()},
+            "peer_means": self.peer_means(),
             "skipped": self.skipped,
         }
 
@@ -158,16 +181,50 @@ def pipeline_weights(asset: RiggedAsset) -> tuple[sp.csr_matrix, str]:
     return (ours.weights @ onto).tocsr(), note
 
 
-def _peer_weights(peers: Path, name: str, shape: tuple[int, int]) -> dict[str, tuple[np.ndarray, float]]:
-    """peer name → (weights (V, J), seconds) from PEERS/<peer>/<name>.npz files that match the asset's shape."""
+@dataclass
+class PeerWeights:
+    """A peer's (V, J) weights for one asset and how its solve went (status: PEER_STATUSES or "error")."""
+
+    weights: np.ndarray
+    seconds: float
+    status: str
+    unweighted_share: float
+    message: str = ""
+
+
+def _peer_weights(peers: Path, name: str, shape: tuple[int, int]) -> dict[str, PeerWeights]:
+    """peer name → its weights from PEERS/<peer>/<name>.npz files that match the asset's shape.
+
+    The status is the file's own (`status`, `unweighted_share`, `messages`); a file without one (written before
+    statuses were kept) is judged from its weights, so an all-zero matrix is a failed solve, never a result."""
     out = {}
     for folder in sorted(p for p in peers.iterdir() if p.is_dir()):
         path = folder / f"{name}.npz"
         if path.is_file():
             data = np.load(path, allow_pickle=False)
-            if data["weights"].shape == shape:
-                out[folder.name] = (data["weights"].astype(np.float64), float(data["seconds"]))
+            if data["weights"].shape != shape:
+                continue
+            weights = data["weights"].astype(np.float64)
+            unweighted = float(np.mean(weights.sum(axis=1) <= UNWEIGHTED)) if len(weights) else 1.0
+            if "status" in data:
+                status = str(data["status"])
+                unweighted = float(data["unweighted_share"]) if "unweighted_share" in data else unweighted
+            else:
+                status = "failed" if unweighted >= 1.0 else "partial" if unweighted > 0 else "ok"
+            message = str(data["messages"]) if "messages" in data else ""
+            out[folder.name] = PeerWeights(weights, float(data["seconds"]), status, unweighted, message)
     return out
+
+
+def _peer_row(name: str, category: str, peer: str, found: PeerWeights, asset: RiggedAsset, clips: np.ndarray | None) -> SkinRow:
+    """A peer's row: scored whatever its status (failed and partial solves are what a user gets), marked with it."""
+    if found.status not in PEER_STATUSES:
+        return SkinRow(name, category, peer, error=f"{found.status}: {found.message or 'no weights'}"[:200], status=found.status)
+    metrics = score_weights(asset, found.weights, clips)
+    metrics["seconds"] = found.seconds
+    what = {"ok": None, "partial": "partial", "failed": "failed (no solution)"}[found.status]
+    note = what and f"{what}: {found.unweighted_share:.1%} of vertices unweighted"
+    return SkinRow(name, category, peer, metrics, note=note, status=found.status, unweighted_share=found.unweighted_share)
 
 
 def evaluate_skinning(
@@ -215,8 +272,6 @@ def evaluate_skinning(
                 kind = exc.code if isinstance(exc, SimcoreError) else type(exc).__name__
                 report.rows.append(SkinRow(name, category, "pipeline", error=f"{kind}: {exc}"[:200]))
         if peers is not None and peers.is_dir():
-            for peer, (weights, seconds) in _peer_weights(peers, name, asset.weights.shape).items():
-                metrics = score_weights(asset, weights, clips)
-                metrics["seconds"] = seconds
-                report.rows.append(SkinRow(name, category, peer, metrics))
+            for peer, found in _peer_weights(peers, name, asset.weights.shape).items():
+                report.rows.append(_peer_row(name, category, peer, found, asset, clips))
     return report
