@@ -13,6 +13,7 @@ from fastapi.staticfiles import StaticFiles
 from api import errors, health
 from api.jobs.router import router as jobs_router
 from api.keys.router import router as keys_router
+from api.security_headers import SecurityHeaders
 from api.settings import get_settings
 from api.upload_limit import UploadLimit
 
@@ -40,6 +41,7 @@ def create_app() -> FastAPI:
     app.include_router(keys_router)
     app.add_middleware(GZipMiddleware, minimum_size=1024)  # the viewer bundle is ~660 KB raw, ~170 KB gzipped; SSE is excluded
     app.add_middleware(UploadLimit, max_bytes=2 * settings.max_upload_bytes + BODY_SLACK_BYTES)
+    app.add_middleware(SecurityHeaders)  # outermost: also on 413s from UploadLimit
     dist = WEB_DIR / "dist"
     if dist.is_dir():
         app.mount("/", StaticFiles(directory=dist, html=True), name="web")

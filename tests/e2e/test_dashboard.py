@@ -15,6 +15,7 @@ import httpx
 import numpy as np
 import pytest
 from PIL import Image
+from playwright.sync_api import expect
 
 from tests.e2e.conftest import ARTIFACTS
 
@@ -267,7 +268,7 @@ def test_animation_playback_and_lbs_vs_physics_side_by_side(page, dashboard_serv
     page.screenshot(path=str(ARTIFACTS / "12-compare-page.png"), full_page=True)
 
     page.click("#viewer-play")
-    page.wait_for_function("() => !document.querySelector('#viewer-time').textContent.startsWith('0.35')")
+    expect(page.locator("#viewer-time")).not_to_have_text(re.compile(r"^0\.35"))  # locator waits: the page's CSP forbids eval
     page.click("#viewer-play")
     assert page.get_attribute("#viewer-play", "aria-pressed") == "false"
 
@@ -300,7 +301,7 @@ def test_jobs_list_filters_pages_and_explains_failures(page, dashboard_server, d
     page.goto("/#/jobs")
     page.wait_for_selector("#jobs-table")
     page.select_option("#status-filter", "failed")
-    page.wait_for_function("() => [...document.querySelectorAll('#jobs-table .badge')].every((b) => b.dataset.status === 'failed')")
+    expect(page.locator("#jobs-table .badge:not([data-status='failed'])")).to_have_count(0)
     assert page.locator(f"#jobs-table tr[data-job-id='{failing}']").count() == 1
     error = page.inner_text(f"#jobs-table tr[data-job-id='{failing}'] .job-error")
     assert error.startswith("unknown_clip") and "no such clip" in error
@@ -312,7 +313,7 @@ def test_jobs_list_filters_pages_and_explains_failures(page, dashboard_server, d
 
     page.select_option("#status-filter", "")
     page.select_option("#page-size", "10")
-    page.wait_for_function("document.querySelectorAll('#jobs-table tbody tr').length === 10")
+    expect(page.locator("#jobs-table tbody tr")).to_have_count(10)
     first_page = page.eval_on_selector_all("#jobs-table tbody tr", "(rows) => rows.map((r) => r.dataset.jobId)")
     assert first_page[0] == ids[-1]  # newest first
     page.click("text=Older →")
