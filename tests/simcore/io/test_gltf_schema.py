@@ -18,7 +18,7 @@ def test_a_20000_deep_node_chain_is_refused_by_depth_in_linear_time():
     started = time.perf_counter()
     with pytest.raises(LimitExceeded) as err:
         node_parents(chain(20_000))
-    assert err.value.code == "hierarchy_too_deep" and time.perf_counter() - started < 0.5
+    assert err.value.code == "hierarchy_too_deep" and time.perf_counter() - started < 2.0  # quadratic took 190 s
 
 
 def test_a_chain_at_the_depth_cap_is_read():
@@ -30,7 +30,7 @@ def test_200000_shallow_nodes_check_in_linear_time():
     nodes = [{"children": list(range(1, 200_000))}] + [{} for _ in range(199_999)]
     started = time.perf_counter()
     assert (node_parents(nodes)[1:] == 0).all()
-    assert time.perf_counter() - started < 2.0
+    assert time.perf_counter() - started < 5.0
 
 
 @pytest.mark.parametrize("nodes", [[{"children": [1]}, {"children": [0]}], [{"children": [0]}], [{"children": [1]}, {"children": [2]}, {"children": [1]}]],
