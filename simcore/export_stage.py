@@ -5,6 +5,7 @@ Writes into state.workdir and state.artifacts:
   texture_<i>.png|jpg                          the upload's images, which the .usdc files' materials reference
   animated.glb, animated.usdc, animated.usdz   when state.animation is set
   refined.glb, refined.usdc                    when state.refined_frames is set (frames of that animation)
+Joints are named first, by `options.naming` (simcore/export_naming.py).
 Every GLB goes through the Khronos validator and every USD through usd-core's compliance checker;
 results land in report["validation"]. A file with validator errors fails the job (code
 `export_invalid`); a validator that is not installed is a report warning only.
@@ -16,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from simcore.errors import SimcoreError
+from simcore.export_naming import apply_naming
 
 if TYPE_CHECKING:
     from simcore.pipeline import PipelineState, StageProgress
@@ -105,6 +107,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
         return
     if state.refined_frames is not None and state.animation is None:
         state.warn("refined frames were dropped from the export: they need the animation they refine")
+    apply_naming(state)
     glbs = _write_glbs(state, progress)
     usds = _write_usds(state, progress)
     _validate(state, glbs, usds)

@@ -59,6 +59,11 @@ class JobOptions(_Strict):
     )
     motion: MotionOptions = Field(default_factory=MotionOptions)
     refine: RefineOptions = Field(default_factory=RefineOptions)
+    naming: Literal["mixamo", "unreal", "unity", "generic"] | None = Field(
+        None, description="joint names of the exported rig: humanoids by bone-map table (Mixamo, Unreal mannequin, "
+                          "Unity Humanoid, generic), other skeletons descriptive (spine_01, tail_03, leg_front_L_02); "
+                          "default: mixamo for predicted skeletons, the upload's own names for skeleton 'keep'",
+    )
     quality_gate: Literal["fail", "warn"] = Field(
         "fail", description="a result past a hard quality threshold fails the job with code quality_gate ('fail') "
                             "or succeeds with the warning flagged ('warn')",
