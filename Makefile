@@ -4,7 +4,7 @@ PYTHON ?= python3.11
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: run test install install-test web
+.PHONY: run test install install-test web fbx-writer
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,12 @@ $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
 
 install-test: install $(VENV)/.installed-test
 	@command -v chromium >/dev/null || (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null)
+	@command -v assimp >/dev/null || (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq assimp-utils >/dev/null)
+
+# Optional FBX writer: Blender's bpy in its own venv (it needs numpy<2; ~1 GB). simcore/io/fbx_export.py finds it.
+fbx-writer:
+	test -x .venv-fbx/bin/python || $(PYTHON) -m venv .venv-fbx
+	.venv-fbx/bin/pip install -q 'bpy==5.0.1' 'numpy<2'
 
 test: install-test
 	$(BIN)/pytest

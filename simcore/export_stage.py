@@ -5,6 +5,7 @@ Writes into state.workdir and state.artifacts:
   texture_<i>.png|jpg                          the upload's images, which the .usdc files' materials reference
   animated.glb, animated.usdc, animated.usdz   when state.animation is set
   refined.glb, refined.usdc                    when state.refined_frames is set (frames of that animation)
+  rigged.fbx, animated.fbx                     when options.fbx and Blender's bpy is there (simcore/io/fbx_export.py)
 Joints are named first, by `options.naming` (simcore/export_naming.py).
 Every GLB goes through the Khronos validator and every USD through usd-core's compliance checker;
 results land in report["validation"]. A file with validator errors fails the job (code
@@ -75,6 +76,26 @@ def _write_usds(state: "PipelineState", progress: "StageProgress") -> list[Path]
     return sorted({p for p in written if p.suffix.startswith(".usd")})
 
 
+def _write_fbxs(state: "PipelineState", glbs: list[Path]) -> None:
+    """rigged.fbx / animated.fbx from the validated GLBs when options.fbx asks; a missing writer is a warning."""
+    from simcore.io.fbx_export import blender_python, write_fbx
+
+    if not state.options.fbx:
+        return
+    if blender_python() is None:
+        state.warn("FBX was asked for but this worker has no FBX writer (Blender's bpy: `make fbx-writer` or "
+                   "RIGFORGE_BLENDER_PYTHON); the GLB and USD files are complete", code="fbx_unavailable")
+        return
+    fps = state.animation.fps if state.animation is not None else 30.0
+    for glb in glbs:
+        if glb.name not in ("rigged.glb", "animated.glb"):
+            continue
+        result = write_fbx(glb, glb.with_suffix(".fbx"), fps=fps)
+        state.artifacts[result.path.name] = result.path
+        state.report.setdefault("export", {})[result.path.name] = {"writer": result.writer, "seconds": result.seconds,
+                                                                   "bytes": result.path.stat().st_size}
+
+
 def _validate(state: "PipelineState", glbs: list[Path], usds: list[Path]) -> None:
     from simcore.io.gltf_validate import ValidatorUnavailable, validate_gltf_files
     from simcore.io.usd_validate import validate_usd_file
@@ -111,4 +132,6 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     glbs = _write_glbs(state, progress)
     usds = _write_usds(state, progress)
     _validate(state, glbs, usds)
+    progress.check_cancel()
+    _write_fbxs(state, glbs)
     progress(1.0)

@@ -64,6 +64,8 @@ class JobOptions(_Strict):
                           "Unity Humanoid, generic), other skeletons descriptive (spine_01, tail_03, leg_front_L_02); "
                           "default: mixamo for predicted skeletons, the upload's own names for skeleton 'keep'",
     )
+    fbx: bool = Field(False, description="also write rigged.fbx (and animated.fbx) with Blender's FBX exporter; "
+                                        "when the worker has no bpy the job succeeds without them and says so")
     quality_gate: Literal["fail", "warn"] = Field(
         "fail", description="a result past a hard quality threshold fails the job with code quality_gate ('fail') "
                             "or succeeds with the warning flagged ('warn')",

@@ -8,7 +8,7 @@ from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, ch
 
 from simcore import export_stage
 from simcore.geometry.mesh import IngestedMesh
-from simcore.io import gltf_validate
+from simcore.io import fbx_export, gltf_validate
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, PipelineState, StageProgress
 
@@ -65,3 +65,23 @@ def test_stage_without_weights_skips_with_a_warning(tmp_path):
     state.weights = None
     export_stage.run(state, _progress([]))
     assert not state.artifacts and state.report["warnings"]
+
+
+def test_fbx_without_a_writer_is_a_warning(tmp_path, monkeypatch):
+    monkeypatch.setattr(fbx_export, "blender_python", lambda: None)
+    state = _state(tmp_path, animated=False)
+    state.options = JobOptions(fbx=True)
+    export_stage.run(state, _progress([]))
+    assert not any(name.endswith(".fbx") for name in state.artifacts)
+    assert any(w["code"] == "fbx_unavailable" for w in state.report["warnings"])
+
+
+@pytest.mark.skipif(fbx_export.blender_python() is None,
+                    reason="FBX writer not installed: no bpy (`make fbx-writer` or RIGFORGE_BLENDER_PYTHON)")
+def test_fbx_files_join_the_artifacts(tmp_path):
+    state = _state(tmp_path, animated=True)
+    state.options = JobOptions(fbx=True)
+    export_stage.run(state, _progress([]))
+    for name in ("rigged.fbx", "animated.fbx"):
+        assert state.artifacts[name].read_bytes().startswith(b"Kaydara FBX Binary")
+        assert state.report["export"][name]["seconds"] > 0
