@@ -35,7 +35,7 @@ WEIGHTS = Path(__file__).parent / "weights" / "skeleton_tokens.safetensors"
 GREEDY_CLASSES = ("articulation", "mixamo", "vroid")
 TEMPERATURE = 0.8
 SCORE_SAMPLES = 3000  # surface points the reach term is measured on
-SOLID_RESOLUTION = 64
+SOLID_RESOLUTION = 128  # joints outside are snapped to this solid: 64 left half of them outside a 128-voxel one
 
 
 def save_skeleton_model(model: SkeletonTokenModel, path: Path, summary: dict) -> None:
@@ -74,7 +74,7 @@ def load_skeleton_model(path: Path = WEIGHTS) -> SkeletonTokenModel:
     return model
 
 
-def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = 8, seed: int = 0,
+def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = 16, seed: int = 0,
                      model_path: Path | None = None) -> tuple[Skeleton, dict]:
     """The best of `candidates` decoded skeletons for a mesh (vertices (V, 3) metres, +Y up; faces (F, 3)), in the
     mesh's frame, and a report: each candidate's class and scores, the chosen one, joints moved inside.

@@ -65,3 +65,10 @@ def test_methods_and_manifest_parsing(dev_assets, tmp_path) -> None:
     assert err.value.field == "method"
     assert read_categories(dev_assets)["fox"] == "quadruped"
     assert read_categories(tmp_path) == {}
+
+
+def test_split_keeps_the_files_the_manifest_lists_for_it(small_dir) -> None:
+    (small_dir / "MANIFEST.tsv").write_text("name\tfile\tcategory\tsplit\nbat\trignet_15930_bat.glb\tflyer\tval\n"
+                                            "simple\trigged_simple.glb\ttoy\ttrain\n")
+    report = evaluate_directory(small_dir, "voxel", split="val").to_dict()
+    assert [(a["name"], a["category"]) for a in report["assets"]] == [("rignet_15930_bat", "flyer")]
