@@ -1,16 +1,50 @@
-"""`rigforge submit INPUT --url --key`: the HTTP client a studio's CI calls."""
+"""`rigforge submit INPUT... --url --key`: the HTTP client a studio's CI calls.
+
+One mesh: prints the job id; `--wait` follows it with a progress bar, `-o DIR` downloads its artifacts.
+Several meshes or a folder (its .glb/.gltf/.zip/.obj/.ply/.stl files, sorted): at most `--concurrency` jobs in
+flight, one line per job as it ends (`file<TAB>job id<TAB>status[<TAB>error]`, a count bar on a terminal),
+artifacts in `DIR/<file stem>/`; the exit status is 1 when any job did not succeed.
+"""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import uuid
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
 import httpx
 import typer
 
-from cli.progress import stage_bar
+from cli.progress import count_bar, stage_bar
+
+MESH_SUFFIXES = (".glb", ".gltf", ".zip", ".obj", ".ply", ".stl")
+ClientFactory = Callable[[str], httpx.Client]  # idempotency key → a client for one job
+
+
+class SubmitError(Exception):
+    """A job that could not be submitted or followed; `exit_code` 2 when the service is unreachable."""
+
+    def __init__(self, message: str, exit_code: int = 1):
+        super().__init__(message)
+        self.exit_code = exit_code
+
+
+@dataclass
+class BatchResult:
+    """One line of a batch: the file, its job id (None when the upload failed), final status, error text."""
+
+    path: Path
+    job_id: str | None
+    status: str
+    error: str = ""
+
+    def line(self) -> str:
+        return "\t".join([str(self.path), self.job_id or "-", self.status] + ([self.error] if self.error else []))
 
 
 def _fail(message: str, code: int = 1) -> typer.Exit:
@@ -26,9 +60,8 @@ def _problem(response: httpx.Response) -> str:
         return f"HTTP {response.status_code}: {response.text[:300]}"
 
 
-def follow(client: httpx.Client, job: dict) -> dict:
-    """Follow the job's SSE stream with a progress bar until it ends; returns the final job."""
-    with stage_bar(f"job {job['id'][:8]}") as update, client.stream("GET", f"/api/v1/jobs/{job['id']}/events", timeout=None) as stream:
+def _events(client: httpx.Client, job: dict, update: Callable[[str, float], None]) -> dict:
+    with client.stream("GET", f"/api/v1/jobs/{job['id']}/events", timeout=None) as stream:
         for line in stream.iter_lines():
             if line.startswith("data: "):
                 job = json.loads(line[6:])
@@ -36,29 +69,136 @@ def follow(client: httpx.Client, job: dict) -> dict:
     return job
 
 
-def submit(
-    input: Annotated[Path, typer.Argument(exists=True, dir_okay=False, help="mesh file")],
-    url: Annotated[str, typer.Option(envvar="RIGFORGE_URL", help="service URL, e.g. http://127.0.0.1:8000")],
-    key: Annotated[str, typer.Option(envvar="RIGFORGE_KEY", help="API key")],
-    motion: Annotated[Path | None, typer.Option(exists=True, dir_okay=False, help="motion clip")] = None,
-    options: Annotated[str | None, typer.Option(help="JobOptions as JSON")] = None,
-    wait: Annotated[bool, typer.Option("--wait", help="follow the job to its end")] = False,
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="download artifacts here (implies --wait)")] = None,
-    idempotency_key: Annotated[str | None, typer.Option(help="retry-safe submission key (default: random)")] = None,
-) -> None:
-    """Upload a mesh, print the job id; with --wait, exit non-zero if the job does not succeed."""
-    headers = {"Authorization": f"Bearer {key}", "Idempotency-Key": idempotency_key or str(uuid.uuid4())}
-    with httpx.Client(base_url=url.rstrip("/"), headers=headers, timeout=httpx.Timeout(30, read=600)) as client:
-        files = {"mesh": (input.name, input.open("rb"))}
+def follow(client: httpx.Client, job: dict) -> dict:
+    """Follow the job's SSE stream with a progress bar until it ends; returns the final job."""
+    with stage_bar(f"job {job['id'][:8]}") as update:
+        return _events(client, job, update)
+
+
+def post_job(client: httpx.Client, mesh: Path, motion: Path | None, options: str | None) -> dict:
+    """Upload one mesh (and motion); returns the queued job. Raises SubmitError."""
+    with mesh.open("rb") as mesh_file:
+        files = {"mesh": (mesh.name, mesh_file)}
         if motion:
             files["motion"] = (motion.name, motion.open("rb"))
         try:
             response = client.post("/api/v1/jobs", files=files, data={"options": options} if options else None)
         except httpx.HTTPError as exc:
-            raise _fail(f"cannot reach {url}: {exc}", 2) from exc
-        if response.status_code != 202:
-            raise _fail(_problem(response))
-        job = response.json()
+            raise SubmitError(f"cannot reach {client.base_url}: {exc}", 2) from exc
+        finally:
+            if motion:
+                files["motion"][1].close()
+    if response.status_code != 202:
+        raise SubmitError(_problem(response))
+    return response.json()
+
+
+def download(client: httpx.Client, job: dict, output: Path) -> list[Path]:
+    """Stream every artifact of a finished job into `output`; returns the written paths."""
+    output.mkdir(parents=True, exist_ok=True)
+    written = []
+    for art in job["artifacts"]:
+        with client.stream("GET", f"/api/v1/jobs/{job['id']}/artifacts/{art['name']}") as r, (output / art["name"]).open("wb") as f:
+            for chunk in r.iter_bytes():
+                f.write(chunk)
+        written.append(output / art["name"])
+    return written
+
+
+def mesh_files(inputs: list[Path]) -> list[Path]:
+    """Files named on the command line, and the mesh files (by suffix, sorted) inside named folders."""
+    out: list[Path] = []
+    for path in inputs:
+        if path.is_dir():
+            out += sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in MESH_SUFFIXES)
+        else:
+            out.append(path)
+    return out
+
+
+def _batch_job(make_client: ClientFactory, key: str, mesh: Path, motion: Path | None, options: str | None,
+               wait: bool, output: Path | None) -> BatchResult:
+    with make_client(key) as client:
+        try:
+            job = post_job(client, mesh, motion, options)
+        except SubmitError as exc:
+            return BatchResult(mesh, None, "rejected", str(exc))
+        if not wait:
+            return BatchResult(mesh, job["id"], job["status"])
+        job = _events(client, job, lambda stage, fraction: None)
+        if job["status"] != "succeeded":
+            err = job.get("error") or {}
+            return BatchResult(mesh, job["id"], job["status"], f"[{err.get('code')}] {err.get('message')}")
+        if output is not None:
+            download(client, job, output / mesh.stem)
+        return BatchResult(mesh, job["id"], job["status"])
+
+
+def run_batch(make_client: ClientFactory, meshes: list[Path], *, motion: Path | None = None,
+              options: str | None = None, wait: bool = False, output: Path | None = None, concurrency: int = 4,
+              idempotency_key: str | None = None, report: Callable[[BatchResult], None] = lambda r: None,
+              ) -> list[BatchResult]:
+    """Submit every mesh with at most `concurrency` jobs in flight; `report` sees each result as it ends.
+
+    A retried batch with the same `idempotency_key` resubmits nothing: each file's key is derived from it.
+    Returns the results in input order.
+    """
+    base = idempotency_key or str(uuid.uuid4())
+    keys = [hashlib.sha256(f"{base}\0{k}\0{m}".encode()).hexdigest()[:32] for k, m in enumerate(meshes)]
+    results: dict[int, BatchResult] = {}
+    with ThreadPoolExecutor(max_workers=max(1, concurrency)) as pool:
+        futures = {pool.submit(_batch_job, make_client, keys[k], m, motion, options, wait, output): k
+                   for k, m in enumerate(meshes)}
+        for future in as_completed(futures):
+            results[futures[future]] = result = future.result()
+            report(result)
+    return [results[k] for k in range(len(meshes))]
+
+
+def submit(
+    inputs: Annotated[list[Path], typer.Argument(exists=True, help="mesh files or folders of them")],
+    url: Annotated[str, typer.Option(envvar="RIGFORGE_URL", help="service URL, e.g. http://127.0.0.1:8000")],
+    key: Annotated[str, typer.Option(envvar="RIGFORGE_KEY", help="API key")],
+    motion: Annotated[Path | None, typer.Option(exists=True, dir_okay=False, help="motion clip (for every mesh)")] = None,
+    options: Annotated[str | None, typer.Option(help="JobOptions as JSON")] = None,
+    wait: Annotated[bool, typer.Option("--wait", help="follow the jobs to their end")] = False,
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="download artifacts here (implies --wait)")] = None,
+    idempotency_key: Annotated[str | None, typer.Option(help="retry-safe submission key (default: random)")] = None,
+    concurrency: Annotated[int, typer.Option(min=1, max=64, help="jobs in flight at once (several inputs)")] = 4,
+) -> None:
+    """Upload meshes and print their job ids; with --wait, exit non-zero if a job does not succeed."""
+    meshes = mesh_files(inputs)
+    if not meshes:
+        raise _fail("no mesh files found (.glb .gltf .zip .obj .ply .stl)")
+
+    def make_client(idem: str) -> httpx.Client:
+        headers = {"Authorization": f"Bearer {key}", "Idempotency-Key": idem}
+        return httpx.Client(base_url=url.rstrip("/"), headers=headers, timeout=httpx.Timeout(30, read=600))
+
+    if len(inputs) == 1 and not inputs[0].is_dir():
+        _submit_one(make_client(idempotency_key or str(uuid.uuid4())), meshes[0], motion, options, wait, output)
+        return
+    with count_bar("jobs") as update:
+        done: list[BatchResult] = []
+
+        def report(result: BatchResult) -> None:
+            done.append(result)
+            update(result.line(), len(done), len(meshes))
+
+        results = run_batch(make_client, meshes, motion=motion, options=options, wait=wait or output is not None,
+                            output=output, concurrency=concurrency, idempotency_key=idempotency_key, report=report)
+    failed = [r for r in results if r.status not in ("succeeded", "queued", "running")]
+    if failed:
+        raise _fail(f"{len(failed)} of {len(results)} jobs did not succeed")
+
+
+def _submit_one(client: httpx.Client, mesh: Path, motion: Path | None, options: str | None, wait: bool,
+                output: Path | None) -> None:
+    with client:
+        try:
+            job = post_job(client, mesh, motion, options)
+        except SubmitError as exc:
+            raise _fail(str(exc), exc.exit_code) from exc
         typer.echo(job["id"])
         if not (wait or output):
             return
@@ -67,9 +207,5 @@ def submit(
             err = job.get("error") or {}
             raise _fail(f"job {job['status']}: [{err.get('code')}] {err.get('message')}")
         if output:
-            output.mkdir(parents=True, exist_ok=True)
-            for art in job["artifacts"]:
-                with client.stream("GET", f"/api/v1/jobs/{job['id']}/artifacts/{art['name']}") as r, (output / art["name"]).open("wb") as f:
-                    for chunk in r.iter_bytes():
-                        f.write(chunk)
-                typer.echo(f"{output / art['name']}  ({art['size']} bytes)")
+            for path, art in zip(download(client, job, output), job["artifacts"]):
+                typer.echo(f"{path}  ({art['size']} bytes)")
