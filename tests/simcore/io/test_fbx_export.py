@@ -91,3 +91,15 @@ def test_animated_fbx_poses_like_the_glb(exported):
         matches = _matches(ours_bind, theirs_bind, size)
         worst = max(np.linalg.norm(ours[m] - theirs[i], axis=1).min() for i, m in enumerate(matches))
         assert worst <= 1e-3 * size, (frame, worst / size)
+
+
+def test_fbx_keeps_the_material_and_embeds_its_texture(exported):
+    files, _, _ = exported
+    for glb, fbx in files.values():
+        assert len(fbx.items("materials")) == len(glb.items("materials")) == 1
+        (image,) = fbx.items("images")
+        data = fbx.view_bytes(image["bufferView"])[0] if "bufferView" in image else b""
+        assert data.startswith(b"\x89PNG"), image
+        factor = fbx.items("materials")[0]["pbrMetallicRoughness"]["baseColorFactor"]
+        expected = glb.items("materials")[0]["pbrMetallicRoughness"]["baseColorFactor"]
+        np.testing.assert_allclose(factor[:3], expected[:3], atol=2e-3)
