@@ -25,6 +25,8 @@ def rig(
     output: Annotated[Path, typer.Option("-o", "--output", help="output directory")] = Path("rigged"),
     motion: Annotated[Path | None, typer.Option(exists=True, dir_okay=False, help="motion clip: BVH or GLB")] = None,
     options: Annotated[str, typer.Option(help="JobOptions as JSON")] = "{}",
+    skeleton: Annotated[Path | None, typer.Option(exists=True, dir_okay=False,
+                                                  help="an edited skeleton.json to re-skin with (needs skeleton: keep)")] = None,
 ) -> None:
     """Rig one file locally and write the artifacts to OUTPUT."""
     from simcore.errors import SimcoreError
@@ -38,7 +40,8 @@ def rig(
         raise typer.Exit(2) from exc
     try:
         inputs = PipelineInputs(input, _read_format(input, "mesh", "mesh"),
-                                motion, _read_format(motion, "motion", "motion") if motion else None)
+                                motion, _read_format(motion, "motion", "motion") if motion else None,
+                                skeleton_path=skeleton)
         with stage_bar(input.name) as update:
             state = run_pipeline(inputs, opts, output, update)
     except SimcoreError as exc:

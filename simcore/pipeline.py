@@ -36,6 +36,7 @@ class PipelineInputs:
     motion_path: Path | None = None
     motion_format: str | None = None
     motion_name: str | None = None  # the uploaded file's own name (stored files are named by hash): names the clip
+    skeleton_path: Path | None = None  # an edited skeleton.json to re-skin with (`skeleton: keep`)
 
 
 @dataclass

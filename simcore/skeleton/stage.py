@@ -1,7 +1,8 @@
 """Pipeline stage `skeleton`: predict (or keep) the skeleton and write skeleton.json.
 
 Options used: `skeleton` (auto | geometric | humanoid | keep), `max_joints`, `up_axis`, `forward_axis`.
-`keep` reuses the upload's own skin (state.mesh.source_rig, already in the mesh frame). A ground plane
+`keep` reuses the upload's own skin (state.mesh.source_rig, already in the mesh frame), or the skeleton file
+given next to the mesh (inputs.skeleton_path, an edited skeleton.json: simcore.skeleton.skeleton_file). A ground plane
 under the model (simcore.geometry.ground) is left out and recorded in state.ground_faces. The ingested mesh
 is +Y up (ingest applies an `up_axis` override), so the humanoid fit is told "y" when an override was
 given and detects the up axis itself otherwise.
@@ -49,6 +50,16 @@ def _tokens(skeleton: Skeleton, vertices: np.ndarray) -> tuple[dict[str, Any] | 
     }, None
 
 
+def _given_skeleton(state: "PipelineState") -> Skeleton:
+    """The uploaded (edited) skeleton file; it goes with `skeleton: keep`."""
+    from simcore.skeleton.skeleton_file import read_skeleton_file
+
+    if state.options.skeleton != "keep":
+        raise InvalidInput("a skeleton file is used as it is: set options.skeleton to 'keep'", code="invalid_option",
+                           field="options.skeleton")
+    return read_skeleton_file(state.inputs.skeleton_path.read_bytes(), state.mesh.vertices)
+
+
 def run(state: "PipelineState", progress: "StageProgress") -> None:
     """Set state.skeleton, write skeleton.json, record report["skeleton"]."""
     options = state.options
@@ -61,7 +72,9 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     parts = surface_parts(mesh.vertices, mesh.faces)
     ground = ground_faces(parts, len(mesh.faces))
     report: dict[str, Any]
-    if options.skeleton == "keep":
+    if state.inputs.skeleton_path is not None:
+        skeleton, method, report = _given_skeleton(state), "given", {}
+    elif options.skeleton == "keep":
         if mesh.source_rig is None:
             raise InvalidInput("options.skeleton is 'keep' but the uploaded mesh has no skin to keep",
                                code="no_skeleton", field="options.skeleton")
