@@ -81,4 +81,4 @@ def write_fbx(glb_path: Path, fbx_path: Path, fps: float = 30.0) -> FbxExport:
             tail = (done.stderr or done.stdout or b"").decode("utf-8", "replace").strip().splitlines()[-1:] or ["no output"]
             raise InvalidInput(f"FBX export failed: {tail[0][:300]}", code="export_failed", field="fbx")
         Path(fbx_path).write_bytes(dst.read_bytes())
-    return FbxExport(Path(fbx_path), round(time.perf_counter() - started, 3), f"bpy via {Path(python).name}")
+    return FbxExport(Path(fbx_path), round(time.perf_counter() - started, 3), "Blender io_scene_fbx (bpy)")

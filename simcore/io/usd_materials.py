@@ -12,21 +12,12 @@ package (WebP, KTX2) are left out and the factor alone is used.
 from __future__ import annotations
 
 import base64
-from dataclasses import dataclass
 from pathlib import Path
 
 from simcore.io.gltf_document import GltfDocument
 
 PNG_MAGIC, JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff"
 WRAP_MODES = {33071: "clamp", 33648: "mirror", 10497: "repeat"}  # glTF sampler wrap → UsdUVTexture wrap
-
-
-@dataclass
-class TextureFile:
-    """One image of the document written beside the USD layer: `name` is its path relative to the layer."""
-
-    image: int
-    name: str
 
 
 def _image_bytes(doc: GltfDocument, image: dict) -> bytes | None:
@@ -38,9 +29,9 @@ def _image_bytes(doc: GltfDocument, image: dict) -> bytes | None:
     return None  # external URIs were dropped unread at ingest
 
 
-def write_texture_files(doc: GltfDocument, directory: Path) -> dict[int, TextureFile]:
-    """Write every PNG/JPEG image of `doc` into `directory`; returns image index → written file."""
-    out: dict[int, TextureFile] = {}
+def write_texture_files(doc: GltfDocument, directory: Path) -> dict[int, str]:
+    """Write every PNG/JPEG image of `doc` into `directory`; returns image index → file name (beside the layer)."""
+    out: dict[int, str] = {}
     for i, image in enumerate(doc.items("images")):
         data = _image_bytes(doc, image)
         if data is None:
@@ -52,12 +43,12 @@ def write_texture_files(doc: GltfDocument, directory: Path) -> dict[int, Texture
         path = Path(directory) / name
         if not path.is_file() or path.read_bytes() != data:
             path.write_bytes(data)
-        out[i] = TextureFile(i, name)
+        out[i] = name
     return out
 
 
-def _texture_image(doc: GltfDocument, slot: dict | None, files: dict[int, TextureFile]) -> tuple[TextureFile, dict] | None:
-    """(file, sampler) of a material's texture slot, or None when it has no usable image."""
+def _texture_image(doc: GltfDocument, slot: dict | None, files: dict[int, str]) -> tuple[str, dict] | None:
+    """(file name, sampler) of a material's texture slot, or None when it has no usable image."""
     if not slot or "index" not in slot:
         return None
     textures = doc.items("textures")
@@ -87,7 +78,7 @@ class _Network:
         reader.CreateInput("varname", Sdf.ValueTypeNames.String).ConnectToSource(varname)
         self.st = reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
 
-    def texture(self, name: str, image: tuple[TextureFile, dict], color_space: str,
+    def texture(self, name: str, image: tuple[str, dict], color_space: str,
                 scale: tuple[float, ...] | None = None, bias: tuple[float, ...] | None = None):
         """A UsdUVTexture reading `image` through the st reader; returns the shader."""
         from pxr import Gf, Sdf, UsdShade
@@ -95,7 +86,7 @@ class _Network:
         file, sampler = image
         shader = UsdShade.Shader.Define(self.stage, f"{self.path}/{name}")
         shader.CreateIdAttr("UsdUVTexture")
-        shader.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(f"./{file.name}"))
+        shader.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(f"./{file}"))
         shader.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(self.st)
         shader.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(color_space)
         shader.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set(WRAP_MODES.get(sampler.get("wrapS", 10497), "repeat"))
@@ -115,7 +106,7 @@ class _Network:
         self.surface.CreateInput(input_name, input_type).ConnectToSource(source)
 
 
-def _define_material(stage, doc: GltfDocument, gltf_material: dict, path: str, files: dict[int, TextureFile]):
+def _define_material(stage, doc: GltfDocument, gltf_material: dict, path: str, files: dict[int, str]):
     from pxr import Gf, Sdf, UsdShade
 
     types = Sdf.ValueTypeNames
@@ -162,7 +153,7 @@ def _define_material(stage, doc: GltfDocument, gltf_material: dict, path: str, f
     return material
 
 
-def define_materials(stage, doc: GltfDocument, root: str, files: dict[int, TextureFile]) -> list:
+def define_materials(stage, doc: GltfDocument, root: str, files: dict[int, str]) -> list:
     """A UsdShade.Material per glTF material (same order) under `root`/Materials; [] when there are none."""
     from pxr import UsdGeom
 

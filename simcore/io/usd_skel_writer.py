@@ -237,4 +237,4 @@ def write_usd_skel(
         if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(out_path)), str(usdz_path)):
             raise InvalidInput(f"could not package {out_path.name} as usdz", code="export_failed", field="usdz")
         written.append(Path(usdz_path))
-    return written + [out_path.parent / t.name for t in textures.values()]
+    return written + [out_path.parent / name for name in textures.values()]
