@@ -25,7 +25,8 @@ def link_textures_directly() -> None:
         mix = bsdf.inputs["Base Color"].links[0].from_node
         if mix.type != "MIX":
             continue
-        image = next((i.links[0].from_node for i in mix.inputs if i.is_linked and i.links[0].from_node.type == "TEX_IMAGE"), None)
+        sources = [i.links[0].from_node for i in mix.inputs if i.is_linked]
+        image = next((node for node in sources if node.type == "TEX_IMAGE"), None)
         factor = next((i.default_value for i in mix.inputs if i.type == "RGBA" and not i.is_linked), None)
         if image is None:
             continue

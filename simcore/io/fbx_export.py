@@ -7,9 +7,9 @@ writes ("block offset is out of range"). We never encode FBX ourselves.
 
 The writer is optional. bpy 5.0.1 needs Python 3.11 and numpy<2 (~1 GB installed), so it lives in its own venv,
 not the worker's (numpy 2): its interpreter is RIGFORGE_BLENDER_PYTHON, else `.venv-fbx/bin/python` in the
-checkout (`make fbx-writer`), else the worker's own interpreter when it can import bpy. It runs `fbx_blender_script.py` on our validated GLB with a wall-clock
-limit, CPU-time, address-space and file-size rlimits, an empty temporary working directory and a minimal
-environment; bpy is never imported into the worker.
+checkout (`make fbx-writer`), else the worker's own interpreter when it can import bpy. It runs
+`fbx_blender_script.py` on our validated GLB with a wall-clock limit, CPU-time, address-space and file-size
+rlimits, an empty temporary working directory and a minimal environment; bpy is never imported into the worker.
 """
 
 from __future__ import annotations

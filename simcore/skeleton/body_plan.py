@@ -222,7 +222,8 @@ def _plan(skeleton: Skeleton) -> BodyPlan:
             for c in r.children[j]:
                 if c not in on_path:
                     digit += 1
-                    sub = Limb("digit", limb.side, _longest_path(c, r.children, r.subtrees), j, f"{limb.prefix}_digit{digit}")
+                    path = _longest_path(c, r.children, r.subtrees)
+                    sub = Limb("digit", limb.side, path, j, f"{limb.prefix}_digit{digit}")
                     limbs.append(sub)
                     queue.append(sub)
     return BodyPlan(names, spine, neck, head, limbs)

@@ -30,7 +30,8 @@ SHORT_BONE = 0.01  # limb joints closer than this share of the size to their par
 UPRIGHT = 0.8  # a humanoid's head is above its hips: the root-to-head line's vertical share at least this
 # Rotation taking each candidate up axis onto +Y (right-handed), for reading a rig modelled with another up.
 UP_READINGS = {
-    "y": np.eye(3), "z": np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]]), "-z": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),
+    "y": np.eye(3),
+    "z": np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]]), "-z": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),
     "x": np.array([[0.0, 1, 0], [-1, 0, 0], [0, 0, 1]]).T, "-x": np.array([[0.0, 1, 0], [-1, 0, 0], [0, 0, 1]]),
 }
 

@@ -79,6 +79,7 @@ def read_skeleton_file(data: bytes, vertices: np.ndarray) -> Skeleton:
     margin = OUTSIDE_FACTOR * float((hi - lo).max())
     outside = np.flatnonzero(np.any((positions < lo - margin) | (positions > hi + margin), axis=1))
     if len(outside):
-        raise _fail(f"joint {names[int(outside[0])]!r} lies far outside the mesh (positions are in the mesh's frame, metres)")
+        name = names[int(outside[0])]
+        raise _fail(f"joint {name!r} lies far outside the mesh (positions are in the mesh's frame, metres)")
     skeleton = Skeleton(positions, parents, names, orientations=orientations)
     return skeleton.reordered(order).validate()

@@ -71,7 +71,8 @@ def test_bone_map_tables_name_every_mixamo_slot_once():
     for preset in PRESETS:
         names = [slot_name(s, preset) for s in slots]
         assert None not in names and len(set(names)) == len(names), preset
-    assert slot_name("LeftForeArm", "unreal") == "lowerarm_l" and slot_name("RightHandPinky2", "unity") == "RightLittleIntermediate"
+    assert slot_name("LeftForeArm", "unreal") == "lowerarm_l"
+    assert slot_name("RightHandPinky2", "unity") == "RightLittleIntermediate"
     assert chain_names("spine", 3, "unity") == ["Spine", "Chest", "UpperChest"]
     assert chain_names("spine", 3, "unreal") == ["spine_01", "spine_02", "spine_03"]
 
