@@ -73,6 +73,9 @@ class Job(Base):
     options: Mapped[dict] = mapped_column(JSON, default=dict)
     mesh_asset_id: Mapped[uuid.UUID] = mapped_column(ForeignKey("assets.id"))
     motion_asset_id: Mapped[uuid.UUID | None] = mapped_column(ForeignKey("assets.id"), nullable=True)
+    # an edited skeleton.json to re-skin with (skeleton: keep), and the job whose skeleton was edited
+    skeleton_asset_id: Mapped[uuid.UUID | None] = mapped_column(ForeignKey("assets.id"), nullable=True)
+    source_job_id: Mapped[uuid.UUID | None] = mapped_column(ForeignKey("jobs.id"), nullable=True)
     idempotency_key: Mapped[str | None] = mapped_column(String(200), nullable=True)
     request_hash: Mapped[str] = mapped_column(String(64))
     attempts: Mapped[int] = mapped_column(Integer, default=0)
@@ -89,6 +92,7 @@ class Job(Base):
 
     mesh_asset: Mapped[Asset] = relationship(foreign_keys=[mesh_asset_id], lazy="joined")
     motion_asset: Mapped[Asset | None] = relationship(foreign_keys=[motion_asset_id], lazy="joined")
+    skeleton_asset: Mapped[Asset | None] = relationship(foreign_keys=[skeleton_asset_id], lazy="joined")
     artifacts: Mapped[list["Artifact"]] = relationship(
         back_populates="job", lazy="selectin", order_by="Artifact.name", cascade="all, delete-orphan"
     )

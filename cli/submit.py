@@ -13,6 +13,7 @@ import json
 import uuid
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
@@ -75,19 +76,18 @@ def follow(client: httpx.Client, job: dict) -> dict:
         return _events(client, job, update)
 
 
-def post_job(client: httpx.Client, mesh: Path, motion: Path | None, options: str | None) -> dict:
-    """Upload one mesh (and motion); returns the queued job. Raises SubmitError."""
-    with mesh.open("rb") as mesh_file:
-        files = {"mesh": (mesh.name, mesh_file)}
-        if motion:
-            files["motion"] = (motion.name, motion.open("rb"))
+def post_job(client: httpx.Client, mesh: Path, motion: Path | None, options: str | None,
+             skeleton: Path | None = None, source_job: str | None = None) -> dict:
+    """Upload one mesh (and motion, or an edited skeleton.json), streamed from disk; returns the queued job.
+    Raises SubmitError."""
+    data = {k: v for k, v in (("options", options), ("source_job", source_job)) if v}
+    with ExitStack() as stack:
+        files = {field: (path.name, stack.enter_context(path.open("rb")))
+                 for field, path in (("mesh", mesh), ("motion", motion), ("skeleton", skeleton)) if path}
         try:
-            response = client.post("/api/v1/jobs", files=files, data={"options": options} if options else None)
+            response = client.post("/api/v1/jobs", files=files, data=data or None)
         except httpx.HTTPError as exc:
             raise SubmitError(f"cannot reach {client.base_url}: {exc}", 2) from exc
-        finally:
-            if motion:
-                files["motion"][1].close()
     if response.status_code != 202:
         raise SubmitError(_problem(response))
     return response.json()
@@ -165,6 +165,9 @@ def submit(
     output: Annotated[Path | None, typer.Option("-o", "--output", help="download artifacts here (implies --wait)")] = None,
     idempotency_key: Annotated[str | None, typer.Option(help="retry-safe submission key (default: random)")] = None,
     concurrency: Annotated[int, typer.Option(min=1, max=64, help="jobs in flight at once (several inputs)")] = 4,
+    skeleton: Annotated[Path | None, typer.Option(exists=True, dir_okay=False,
+                                                  help="an edited skeleton.json to re-skin with (one mesh)")] = None,
+    source_job: Annotated[str | None, typer.Option(help="the job whose skeleton was edited (links the two)")] = None,
 ) -> None:
     """Upload meshes and print their job ids; with --wait, exit non-zero if a job does not succeed."""
     meshes = mesh_files(inputs)
@@ -176,8 +179,11 @@ def submit(
         return httpx.Client(base_url=url.rstrip("/"), headers=headers, timeout=httpx.Timeout(30, read=600))
 
     if len(inputs) == 1 and not inputs[0].is_dir():
-        _submit_one(make_client(idempotency_key or str(uuid.uuid4())), meshes[0], motion, options, wait, output)
+        _submit_one(make_client(idempotency_key or str(uuid.uuid4())), meshes[0], motion, options, wait, output,
+                    skeleton, source_job)
         return
+    if skeleton or source_job:
+        raise _fail("--skeleton and --source-job go with one mesh")
     with count_bar("jobs") as update:
         done: list[BatchResult] = []
 
@@ -193,10 +199,10 @@ def submit(
 
 
 def _submit_one(client: httpx.Client, mesh: Path, motion: Path | None, options: str | None, wait: bool,
-                output: Path | None) -> None:
+                output: Path | None, skeleton: Path | None, source_job: str | None) -> None:
     with client:
         try:
-            job = post_job(client, mesh, motion, options)
+            job = post_job(client, mesh, motion, options, skeleton, source_job)
         except SubmitError as exc:
             raise _fail(str(exc), exc.exit_code) from exc
         typer.echo(job["id"])

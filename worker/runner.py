@@ -75,7 +75,8 @@ def execute(job_id: uuid.UUID, settings: Settings, worker_id: str) -> str:
         job = session.get(Job, job_id)
         motion = job.motion_asset
         inputs_spec = (Path(job.mesh_asset.path), job.mesh_asset.format, Path(motion.path) if motion else None,
-                       motion.format if motion else None, Path(motion.filename).stem if motion else None)
+                       motion.format if motion else None, Path(motion.filename).stem if motion else None,
+                       Path(job.skeleton_asset.path) if job.skeleton_asset else None)
         options = JobOptions.model_validate(job.options)
     storage = LocalStorage(settings.storage_dir)
     work = storage.work_dir(job_id, claim.attempt)

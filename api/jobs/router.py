@@ -18,7 +18,7 @@ from api.db import session_scope
 from api.errors import Problem
 from api.jobs import service, state
 from api.jobs.schemas import JobOut, JobPage, JobStatus
-from api.jobs.uploads import store_upload
+from api.jobs.uploads import store_skeleton, store_upload
 from api.models import Job
 from api.queue import enqueue_job
 from api.settings import get_settings
@@ -67,24 +67,35 @@ def load_job(job_id: uuid.UUID, key: CurrentKey) -> Job:
 OwnedJob = Annotated[Job, Depends(load_job)]
 
 
-@router.post("", status_code=202, response_model=JobOut, summary="Submit a mesh (and optional motion) for rigging")
+@router.post("", status_code=202, response_model=JobOut,
+             summary="Submit a mesh (and optional motion, or an edited skeleton to re-skin with) for rigging")
 def submit_job(
     request: Request,
     key: CurrentKey,
     mesh: Annotated[UploadFile, File(description="GLB, glTF (embedded buffers), OBJ, PLY or STL")],
     motion: Annotated[UploadFile | None, File(description="BVH, or GLB/glTF carrying animation clips")] = None,
     options: Annotated[str | None, Form(description="JobOptions as a JSON string")] = None,
+    skeleton: Annotated[UploadFile | None, File(description="an edited skeleton.json to re-skin with "
+                                                            "(with options.skeleton 'keep')")] = None,
+    source_job: Annotated[uuid.UUID | None, Form(description="the job whose skeleton was edited (links the two)")] = None,
     idempotency_key: Annotated[str | None, Header(alias="Idempotency-Key", max_length=200)] = None,
 ) -> JobOut:
     job_options = parse_options(options)
+    if skeleton is not None and job_options.skeleton != "keep":
+        raise Problem(422, "invalid_options", "a skeleton file is used as it is: set options.skeleton to 'keep'",
+                      field="options.skeleton")
+    if source_job is not None:
+        load_job(source_job, key)  # 404 unless it is the caller's
     settings = get_settings()
     storage = LocalStorage(settings.storage_dir)
     stored_mesh = store_upload(storage, mesh, kind="mesh", field="mesh", max_bytes=settings.max_upload_bytes)
     stored_motion = store_upload(storage, motion, kind="motion", field="motion", max_bytes=settings.max_upload_bytes) if motion else None
+    stored_skeleton = store_skeleton(storage, skeleton, max_bytes=settings.max_upload_bytes) if skeleton else None
     with session_scope() as session:
         try:
             job, created = service.create_job(session, owner_id=key.id, mesh=stored_mesh, motion=stored_motion,
-                                              options=job_options, idempotency_key=idempotency_key)
+                                              options=job_options, idempotency_key=idempotency_key,
+                                              skeleton=stored_skeleton, source_job_id=source_job)
         except service.IdempotencyConflict:
             raise Problem(409, "idempotency_conflict", "this Idempotency-Key was used with a different request",
                           field="Idempotency-Key") from None

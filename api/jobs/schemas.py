@@ -55,6 +55,8 @@ class JobOut(BaseModel):
     attempts: int
     mesh: InputFile
     motion: InputFile | None
+    skeleton: InputFile | None = Field(None, description="the edited skeleton.json this job re-skins with")
+    source_job_id: uuid.UUID | None = Field(None, description="the job whose skeleton was edited into this one")
     error: JobError | None
     warnings: list[JobWarning]
     artifacts: list[ArtifactOut]

@@ -22,8 +22,12 @@ class IdempotencyConflict(Exception):
     """The Idempotency-Key was used before with a different request."""
 
 
-def request_hash(mesh_sha: str, motion_sha: str | None, options: JobOptions) -> str:
-    canonical = json.dumps({"mesh": mesh_sha, "motion": motion_sha, "options": options.model_dump(mode="json")}, sort_keys=True)
+def request_hash(mesh_sha: str, motion_sha: str | None, options: JobOptions, skeleton_sha: str | None = None,
+                 source_job_id: uuid.UUID | None = None) -> str:
+    request = {"mesh": mesh_sha, "motion": motion_sha, "options": options.model_dump(mode="json")}
+    if skeleton_sha or source_job_id:  # absent for plain jobs, so their hashes stay as they were
+        request.update(skeleton=skeleton_sha, source_job=str(source_job_id) if source_job_id else None)
+    canonical = json.dumps(request, sort_keys=True)
     return hashlib.sha256(canonical.encode()).hexdigest()
 
 
@@ -43,18 +47,23 @@ def _earlier(session: Session, owner_id: uuid.UUID, idempotency_key: str, digest
 
 def create_job(
     session: Session, *, owner_id: uuid.UUID, mesh: tuple[StoredFile, str, str], motion: tuple[StoredFile, str, str] | None,
-    options: JobOptions, idempotency_key: str | None,
+    options: JobOptions, idempotency_key: str | None, skeleton: tuple[StoredFile, str, str] | None = None,
+    source_job_id: uuid.UUID | None = None,
 ) -> tuple[Job, bool]:
     """Record the assets and a queued job; returns (job, created). Same key + same request → the earlier job,
     also when the two requests race (the loser of the unique constraint answers with the winner's job)."""
-    digest = request_hash(mesh[0].sha256, motion[0].sha256 if motion else None, options)
+    digest = request_hash(mesh[0].sha256, motion[0].sha256 if motion else None, options,
+                          skeleton[0].sha256 if skeleton else None, source_job_id)
     if idempotency_key and (earlier := _earlier(session, owner_id, idempotency_key, digest)) is not None:
         return earlier, False
     mesh_asset = _asset(session, owner_id, *mesh)
     motion_asset = _asset(session, owner_id, *motion) if motion else None
+    skeleton_asset = _asset(session, owner_id, *skeleton) if skeleton else None
     session.flush()
     job = Job(owner_id=owner_id, options=options.model_dump(mode="json"), mesh_asset_id=mesh_asset.id,
-              motion_asset_id=motion_asset.id if motion_asset else None, idempotency_key=idempotency_key, request_hash=digest)
+              motion_asset_id=motion_asset.id if motion_asset else None,
+              skeleton_asset_id=skeleton_asset.id if skeleton_asset else None, source_job_id=source_job_id,
+              idempotency_key=idempotency_key, request_hash=digest)
     session.add(job)
     try:
         session.commit()
@@ -107,5 +116,6 @@ def to_schema(job: Job, base_url: str) -> JobOut:
     ]
     return JobOut(id=job.id, status=job.status, stage=job.stage, progress=job.progress, created_at=job.created_at, started_at=job.started_at,
                   finished_at=job.finished_at, options=job.options, attempts=job.attempts, mesh=_input(job.mesh_asset),
-                  motion=_input(job.motion_asset), error=error,
+                  motion=_input(job.motion_asset), skeleton=_input(job.skeleton_asset), source_job_id=job.source_job_id,
+                  error=error,
                   warnings=[JobWarning.model_validate(w) for w in job.warnings or []], artifacts=artifacts)

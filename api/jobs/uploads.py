@@ -66,3 +66,17 @@ def store_upload(storage: LocalStorage, upload: UploadFile, *, kind: str, field:
     fmt = upload_format(stored.head, stored.size, kind=kind, field=field)
     check_structure(stored.path, fmt, field=field)
     return stored, upload.filename or field, fmt
+
+
+def store_skeleton(storage: LocalStorage, upload: UploadFile, *, max_bytes: int) -> tuple[StoredFile, str, str]:
+    """Store an edited skeleton.json and check it (simcore.skeleton.skeleton_file; the mesh bounds are checked by
+    the worker); returns (stored file, original filename, "json"). Raises Problem/SimcoreError naming `skeleton`."""
+    from simcore.skeleton.skeleton_file import MAX_FILE_BYTES, read_skeleton_file
+
+    try:
+        stored = storage.save_stream(upload.file, min(max_bytes, MAX_FILE_BYTES))
+    except UploadTooLarge:
+        raise Problem(413, "upload_too_large", f"'skeleton' is larger than {MAX_FILE_BYTES // 1024} KB",
+                      field="skeleton") from None
+    read_skeleton_file(stored.path.read_bytes())
+    return stored, upload.filename or "skeleton.json", "json"

@@ -39,8 +39,9 @@ def _array(doc: dict, key: str, width: int | None, count: int) -> np.ndarray:
     return value
 
 
-def read_skeleton_file(data: bytes, vertices: np.ndarray) -> Skeleton:
-    """The Skeleton in an uploaded skeleton JSON, parents first. vertices: (V, 3) the ingested mesh, for the bounds.
+def read_skeleton_file(data: bytes, vertices: np.ndarray | None = None) -> Skeleton:
+    """The Skeleton in an uploaded skeleton JSON, parents first. vertices: (V, 3) the ingested mesh, whose bounds
+    the joints must stay near; None skips that check (the API reads the file before the mesh is ingested).
 
     Raises InvalidInput(code="invalid_skeleton", field="skeleton") naming what is wrong.
     """
@@ -75,7 +76,7 @@ def read_skeleton_file(data: bytes, vertices: np.ndarray) -> Skeleton:
         order = parents_first_order(parents)
     except InvalidInput as exc:  # a cycle or an index out of range
         raise _fail(str(exc)) from None
-    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    lo, hi = (vertices.min(axis=0), vertices.max(axis=0)) if vertices is not None else (positions.min(0), positions.max(0))
     margin = OUTSIDE_FACTOR * float((hi - lo).max())
     outside = np.flatnonzero(np.any((positions < lo - margin) | (positions > hi + margin), axis=1))
     if len(outside):

@@ -106,3 +106,21 @@ def test_one_file_keeps_the_single_job_output(service, tmp_path):
     assert result.exit_code == 0, result.output
     assert result.output.splitlines()[0] == "job-0"
     assert f"{tmp_path / 'out' / 'report.json'}  (2 bytes)" in result.output
+
+
+def test_an_edited_skeleton_goes_with_its_source_job(service, tmp_path, monkeypatch):
+    seen = {}
+    handle = service.handle
+
+    def spy(request: httpx.Request) -> httpx.Response:
+        if request.method == "POST":
+            seen["body"] = request.content
+        return handle(request)
+
+    monkeypatch.setattr(service, "handle", spy)
+    folder = _folder(tmp_path, ["fox.glb"])
+    (folder / "edited.json").write_text('{"names": ["root"]}')
+    result = CliRunner().invoke(app, ["submit", str(folder / "fox.glb"), "--url", "http://svc", "--key", "k",
+                                      "--skeleton", str(folder / "edited.json"), "--source-job", "job-7"])
+    assert result.exit_code == 0, result.output
+    assert b'name="skeleton"; filename="edited.json"' in seen["body"] and b"job-7" in seen["body"]

@@ -1,0 +1,60 @@
+"""Re-skinning an edited skeleton over the API: a skeleton file next to the mesh, linked to the job it came from."""
+
+from __future__ import annotations
+
+import json
+
+from simcore.io.gltf_document import GltfDocument
+from simcore.io.gltf_rig import read_rigged_asset
+
+KEEP = json.dumps({"skeleton": "keep", "stages": ["skeleton", "skin", "export"]})
+
+
+def _post(client, auth, fox: bytes, options: str, **extra):
+    files = {"mesh": ("fox.glb", fox)}
+    data = {"options": options}
+    if "skeleton" in extra:
+        files["skeleton"] = ("edited.json", extra.pop("skeleton"))
+    data.update(extra)
+    return client.post("/api/v1/jobs", headers=auth, files=files, data=data)
+
+
+def _artifact(client, auth, job: dict, name: str) -> bytes:
+    url = next(a["url"] for a in job["artifacts"] if a["name"] == name)
+    return client.get(url, headers=auth).content
+
+
+def test_an_edited_skeleton_is_reskinned_and_linked(client, auth, dev_assets):
+    fox = (dev_assets / "fox.glb").read_bytes()
+    first = client.get(f"/api/v1/jobs/{_post(client, auth, fox, json.dumps({'stages': ['skeleton']})).json()['id']}",
+                       headers=auth).json()
+    assert first["status"] == "succeeded", first
+    edited = json.loads(_artifact(client, auth, first, "skeleton.json"))
+    edited["positions"][3][1] += 0.02  # a joint moved 2 cm up in the editor
+    edited["names"][3] = "moved_joint"
+    r = _post(client, auth, fox, KEEP, skeleton=json.dumps(edited).encode(), source_job=first["id"])
+    assert r.status_code == 202, r.text
+    job = client.get(f"/api/v1/jobs/{r.json()['id']}", headers=auth).json()
+    assert job["status"] == "succeeded", job
+    assert job["source_job_id"] == first["id"] and job["skeleton"]["filename"] == "edited.json"
+    rig = read_rigged_asset(GltfDocument.from_bytes(_artifact(client, auth, job, "rigged.glb")))
+    k = rig.skeleton.names.index("moved_joint")
+    assert abs(rig.skeleton.positions[k][1] - edited["positions"][3][1]) < 1e-5
+    assert json.loads(_artifact(client, auth, job, "report.json"))["skeleton"]["method"] == "given"
+
+
+def test_a_skeleton_file_needs_keep_and_must_be_a_tree(client, auth, dev_assets):
+    fox = (dev_assets / "fox.glb").read_bytes()
+    tree = json.dumps({"names": ["a", "b"], "parents": [-1, 0], "positions": [[0, 0, 0], [0, 0.1, 0]]}).encode()
+    r = _post(client, auth, fox, '{"stages": []}', skeleton=tree)
+    assert r.status_code == 422 and r.json()["field"] == "options.skeleton", r.text
+    cycle = json.dumps({"names": ["a", "b"], "parents": [1, 0], "positions": [[0, 0, 0], [0, 0.1, 0]]}).encode()
+    r = _post(client, auth, fox, KEEP, skeleton=cycle)
+    assert r.status_code == 422 and r.json()["code"] == "invalid_skeleton" and r.json()["field"] == "skeleton", r.text
+
+
+def test_the_source_job_must_be_yours(client, auth, other_auth, dev_assets):
+    fox = (dev_assets / "fox.glb").read_bytes()
+    theirs = _post(client, other_auth, fox, '{"stages": []}').json()["id"]
+    r = _post(client, auth, fox, '{"stages": []}', source_job=theirs)
+    assert r.status_code == 404 and r.json()["code"] == "job_not_found", r.text
