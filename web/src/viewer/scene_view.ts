@@ -45,6 +45,7 @@ export class SceneView {
   private clipName: string | null = null;
   private followAnchor: THREE.Vector3 | null = null;  // root bone position the camera was last placed for
   private resize: ResizeObserver;
+  private readonly poseRest = new Map<THREE.Bone, THREE.Quaternion>();  // bones the pose test turned: their rotation before
 
   constructor(readonly canvas: HTMLCanvasElement) {
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
@@ -110,6 +111,7 @@ export class SceneView {
 
   /** Show `models` (side by side when several), frame the camera on them, keep the colour mode and clip. */
   show(models: LoadedModel[]): void {
+    this.resetPose();
     for (const m of this.models) { this.scene.remove(m.root); if (m.overlay) { this.scene.remove(m.overlay.group); m.overlay.dispose(); } }
     this.models = models;
     // View the creature from the side of its long horizontal axis (a profile for quadrupeds, the front for
@@ -173,8 +175,29 @@ export class SceneView {
     return Math.max(0, ...this.models.flatMap((m) => m.clips.filter((c) => c.name === this.clipName).map((c) => c.duration)));
   }
 
+  /** Turn bone `name` of every model by (x, y, z) degrees (XYZ Euler, in its own frame) from where it was before
+   *  the pose test first turned it, to see how its weights deform the mesh. */
+  poseBone(name: string, degrees: [number, number, number]): void {
+    const turn = new THREE.Quaternion().setFromEuler(new THREE.Euler(...degrees.map((d) => THREE.MathUtils.degToRad(d)) as [number, number, number]));
+    for (const m of this.models) {
+      const bone = m.bones.find((b) => b.name === name);
+      if (!bone) continue;
+      if (!this.poseRest.has(bone)) this.poseRest.set(bone, bone.quaternion.clone());
+      bone.quaternion.copy(this.poseRest.get(bone)!).multiply(turn);
+    }
+    this.invalidate();
+  }
+
+  /** Put every bone the pose test turned back where it was. */
+  resetPose(): void {
+    for (const [bone, rest] of this.poseRest) bone.quaternion.copy(rest);
+    this.poseRest.clear();
+    this.invalidate();
+  }
+
   /** Play `name` on every model that has it (the bind pose when null). */
   setClip(name: string | null): void {
+    this.resetPose();
     this.clipName = name;
     for (const m of this.models) {
       m.mixer.stopAllAction();

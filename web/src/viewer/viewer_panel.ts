@@ -1,8 +1,9 @@
 // The viewer's controls around the canvas: model choice (incl. LBS vs physics), colour mode, bone picking,
-// skeleton overlay, animation playback and the volume-change plot. Loaded lazily with three.js.
+// skeleton overlay, pose test, animation playback and the volume-change plot. Loaded lazily with three.js.
 import { api, type Artifact } from "../api/client";
 import { volumePlot, type VolumePlot } from "../report/volume_plot";
 import { h, replace } from "../ui/dom";
+import { posePanel } from "./pose_panel";
 import { SceneView, type ColorMode, type LoadedModel } from "./scene_view";
 
 const COMPARE = "__compare__";
@@ -49,6 +50,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
   const modeLabels = { texture: "Textured", weights: "Weights of the selected bone", dominant: "Dominant bone" };
   const boneSelect = h("select", { id: "viewer-bone", onchange: () => selectBone(boneSelect.value || null) });
   const skeletonBox = h("input", { type: "checkbox", id: "viewer-skeleton", checked: true, onchange: () => view.setSkeletonVisible(skeletonBox.checked) });
+  const pose = posePanel(view, () => setPlaying(false));
   const legend = h("div", { hidden: true }, h("div", { class: "legend" }), h("div", { class: "legend-labels" }, h("span", {}, "0"), h("span", {}, "0.5"), h("span", {}, "1")));
 
   const clipSelect = h("select", { id: "viewer-clip", onchange: () => { view.setClip(clipSelect.value || null); syncTime(); } });
@@ -84,6 +86,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
 
   function selectBone(name: string | null): void {
     view.selectBone(name);
+    pose.select(name);
     boneSelect.value = name ?? "";
     if (name && view.colorMode !== "weights") { modeRadios[1].checked = true; view.setColorMode("weights"); legend.hidden = false; }
     status.textContent = name ? `bone ${name}: weights shown from 0 (blue) to 1 (red)` : describe();
@@ -103,6 +106,8 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
       const loaded = await Promise.all(models);
       const keep = view.time;
       view.show(loaded);
+      pose.reset();
+      pose.select(view.boneNames().includes(view.selectedBone ?? "") ? view.selectedBone : null);
       if (keep > 0) view.setTime(Math.min(keep, view.duration()));
       replace(labels, ...(loaded.length > 1 ? loaded.map((m) => h("span", {}, m.label)) : []));
       replace(boneSelect, h("option", { value: "" }, view.boneNames().length ? "— none —" : "no skeleton"),
@@ -178,6 +183,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
         ...modeRadios.map((r) => h("label", {}, r, " ", modeLabels[r.value as ColorMode])),
         h("label", { for: "viewer-bone" }, "Bone"), boneSelect, legend,
         h("label", {}, skeletonBox, " Skeleton overlay")),
+      pose.el,
       h("fieldset", {}, h("legend", {}, "Animation"), h("label", { for: "viewer-clip" }, "Clip"), clipSelect,
         h("div", { class: "row" }, playButton, timeText), scrub,
         h("label", { title: "keep the character in view when the clip moves it" }, followBox, " Follow the character")),
