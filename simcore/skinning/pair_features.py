@@ -7,9 +7,14 @@ box, longest side 1), so the features do not depend on the character's size or v
 Per vertex-bone pair (PAIR_FEATURES): geodesic and straight distance to the joint's bone segments, both
 again relative to the vertex's nearest joint, the position along the nearest segment, the geodesic
 method's log-weight, the rank, how the joint sits in the tree relative to the vertex's nearest joint
-(same, parent, child, sibling, other), and whether the surface normal faces away from the bone.
+(same, parent, child, sibling, other), whether the surface normal faces away from the bone, and the same
+distance seen by the vertex's whole island (connected surface part): the island's mean geodesic distance to
+the joint, relative to the island's nearest joint, and whether the joint is that nearest one. Game and
+low-poly characters are often built from separate parts that artists bind rigidly to one bone; the island
+features let the model see a part as a whole.
 Per bone (BONE_FEATURES): head, mean tail, length, depth, child count, leaf and root flags.
-Per vertex (POINT_FEATURES): position, normal, nearest geodesic and straight distances.
+Per vertex (POINT_FEATURES): position, normal, nearest geodesic and straight distances, the island's share of
+the vertices and its bounding-box diagonal.
 """
 
 from __future__ import annotations
@@ -18,17 +23,21 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 import trimesh
+from scipy.sparse.csgraph import connected_components
 
+from simcore.geometry.laplacian import adjacency
+from simcore.geometry.weld import weld_vertices
 from simcore.metrics.skinning import unit_cube_frame
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
 from simcore.skinning.geodesic import DISTANCE_UNIT, LEAF_EXTENSION, falloff_weights, geodesic_distances
 
 CANDIDATES = 16  # joints per vertex: 99.4 % of artist weight mass lies on the 16 geodesically nearest (train split)
-PAIR_FEATURES = 15
+PAIR_FEATURES = 18
 BONE_FEATURES = 11
-POINT_FEATURES = 8
+POINT_FEATURES = 10
 FAR = 4.0  # unit-cube distance standing in for a joint the solid does not connect to the vertex
 EPS = DISTANCE_UNIT  # softens ratios of distances near a bone
 
@@ -88,6 +97,31 @@ def _relations(parents: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     return np.stack([same, parent, child, sibling, other], axis=-1).astype(np.float32)
 
 
+def islands(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(V,) int64 connected surface part of each vertex (coincident vertices welded first)."""
+    welded = weld_vertices(vertices, faces)
+    _, label = connected_components(adjacency(welded.faces, len(welded.vertices)), directed=False)
+    return label[welded.index].astype(np.int64)
+
+
+def island_features(vertices: np.ndarray, label: np.ndarray, geo: np.ndarray, cand: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """((V, K, 3) island-mean geodesic distance to each candidate, its log ratio to the island's nearest joint's,
+    is-the-island's-nearest flag; (V, 2) island vertex share (log) and bounding-box diagonal), unit-cube units."""
+    count = np.bincount(label)
+    member = sp.csr_matrix((1.0 / count[label], (label, np.arange(len(label)))), shape=(len(count), len(label)))
+    mean = np.asarray(member @ geo)  # (islands, J)
+    best = mean.min(axis=1)
+    m = mean[label[:, None], cand]  # (V, K)
+    b = best[label][:, None]
+    pair = np.stack([m, np.log((m + EPS) / (b + EPS)), (m <= b).astype(np.float64)], axis=-1)
+    lo = np.full((len(count), 3), np.inf)
+    hi = np.full((len(count), 3), -np.inf)
+    np.minimum.at(lo, label, vertices)
+    np.maximum.at(hi, label, vertices)
+    point = np.column_stack([np.log(count[label] / len(label)), np.linalg.norm(hi - lo, axis=1)[label]])
+    return pair, point
+
+
 def skin_inputs(
     vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, *, candidates: int = CANDIDATES,
     progress: Callable[[float], None] = lambda fraction: None,
@@ -119,13 +153,14 @@ def skin_inputs(
     towards = (v - centre)[:, None, :] / side - heads[cand]  # joint head → vertex
     facing = np.einsum("vkc,vc->vk", towards, normals) / np.maximum(np.linalg.norm(towards, axis=2), 1e-9)
     g0, e0 = g[:, :1], e.min(axis=1, keepdims=True)
+    island_pair, island_point = island_features((v - centre) / side, islands(v, faces), geo, cand)
     pair = np.concatenate([
         np.stack([g, e, g - g0, np.log((g + EPS) / (g0 + EPS)), np.log((e + EPS) / (e0 + EPS)), a,
                   np.maximum(prior, -30.0) / 30.0, np.broadcast_to(np.arange(k) / max(k - 1, 1), g.shape),
                   facing, e - e0], axis=-1),
-        _relations(skeleton.parents, cand),
+        _relations(skeleton.parents, cand), island_pair,
     ], axis=-1)
-    point = np.column_stack([(v - centre) / side, normals, g0, e0])
+    point = np.column_stack([(v - centre) / side, normals, g0, e0, island_point])
     progress(1.0)
     return SkinInputs(cand, pair.astype(np.float32), bone_features(skeleton, centre, side), point.astype(np.float32),
                       prior.astype(np.float32))
