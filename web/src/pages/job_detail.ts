@@ -51,6 +51,9 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
       h("dt", {}, "Ran"), h("dd", {}, job.started_at ? `${dateTime(job.started_at)} · ${duration(job.started_at, job.finished_at)}${job.attempts > 1 ? ` · attempt ${job.attempts}` : ""}` : "not started"),
       h("dt", {}, "Mesh"), h("dd", {}, `${job.mesh.filename} (${job.mesh.format}, ${bytes(job.mesh.size)})`),
       h("dt", {}, "Motion"), h("dd", {}, job.motion ? `${job.motion.filename} (${job.motion.format}, ${bytes(job.motion.size)})` : "none"),
+      job.source_job_id ? h("dt", {}, "Re-skin of") : null,
+      job.source_job_id ? h("dd", { id: "job-source" }, h("a", { href: `#/jobs/${job.source_job_id}` }, job.source_job_id),
+        job.skeleton ? ` with ${job.skeleton.filename}` : "") : null,
       h("dt", {}, "Options"), h("dd", {}, h("details", {}, h("summary", {}, "JSON"), h("pre", {}, JSON.stringify(job.options, null, 2))))));
   }
 
@@ -99,7 +102,7 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
     const host = h("div", {});
     replace(viewerHost, h("h2", {}, "Viewer"), host);
     disposeViewer = mountViewer(host, { artifacts: job.artifacts, volume: lbs && refined ? { lbs, refined } : null,
-      worstFrames: worstFrames(job, report) });
+      worstFrames: worstFrames(job, report), jobId: job.id });
   }
 
   function update(job: Job): void {

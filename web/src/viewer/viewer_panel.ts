@@ -4,6 +4,7 @@ import { api, type Artifact } from "../api/client";
 import { volumePlot, type VolumePlot } from "../report/volume_plot";
 import { h, replace } from "../ui/dom";
 import { posePanel } from "./pose_panel";
+import { rigEditor } from "./rig_editor";
 import { SceneView, type ColorMode, type LoadedModel } from "./scene_view";
 
 const COMPARE = "__compare__";
@@ -20,6 +21,7 @@ export interface ViewerInput {
   artifacts: Artifact[];
   volume?: { lbs: number[]; refined: number[] } | null;
   worstFrames?: WorstFrame[];
+  jobId?: string;  // the job shown: its skeleton can be edited and re-skinned as a new job
 }
 
 export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
@@ -51,6 +53,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
   const boneSelect = h("select", { id: "viewer-bone", onchange: () => selectBone(boneSelect.value || null) });
   const skeletonBox = h("input", { type: "checkbox", id: "viewer-skeleton", checked: true, onchange: () => view.setSkeletonVisible(skeletonBox.checked) });
   const pose = posePanel(view, () => setPlaying(false));
+  const editor = input.jobId ? rigEditor(view, input.jobId, input.artifacts) : null;
   const legend = h("div", { hidden: true }, h("div", { class: "legend" }), h("div", { class: "legend-labels" }, h("span", {}, "0"), h("span", {}, "0.5"), h("span", {}, "1")));
 
   const clipSelect = h("select", { id: "viewer-clip", onchange: () => { view.setClip(clipSelect.value || null); syncTime(); } });
@@ -101,6 +104,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
   async function show(models: Promise<LoadedModel>[], names: string[]): Promise<void> {
     stage.dataset.state = "loading";
     window.rigforgeViewer!.state = "loading";
+    editor?.close();
     status.textContent = `loading ${names.join(" and ")}…`;
     try {
       const loaded = await Promise.all(models);
@@ -184,6 +188,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
         h("label", { for: "viewer-bone" }, "Bone"), boneSelect, legend,
         h("label", {}, skeletonBox, " Skeleton overlay")),
       pose.el,
+      editor?.el ?? null,
       h("fieldset", {}, h("legend", {}, "Animation"), h("label", { for: "viewer-clip" }, "Clip"), clipSelect,
         h("div", { class: "row" }, playButton, timeText), scrub,
         h("label", { title: "keep the character in view when the clip moves it" }, followBox, " Follow the character")),
@@ -192,5 +197,5 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
     h("p", { class: "muted" }, "signed volume relative to the rest pose per frame; physics should stay nearer 0 %"), plot.el) : null);
 
   showSelection();
-  return () => { view.dispose(); delete window.rigforgeViewer; };
+  return () => { editor?.dispose(); view.dispose(); delete window.rigforgeViewer; };
 }
