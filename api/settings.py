@@ -43,7 +43,7 @@ class Settings(BaseSettings):
     jobs: JobSettings = Field(default_factory=JobSettings)
 
     @model_validator(mode="after")
-    def _resolve(self) -> "Settings":
+    def _resolve(self) -> Settings:
         self.data_dir = self.data_dir.expanduser().resolve()
         if self.env == "production" and (self.database_url is None or self.database_url.startswith("sqlite")):
             raise ValueError("RIGFORGE_DATABASE_URL must name a server database in production")

@@ -11,9 +11,9 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from cli.eval_output import write_report_json
 from rich.console import Console
 
+from cli.eval_output import write_report_json
 from simcore.evaluation.gate_eval import GateCalibration, calibrate_gate
 from simcore.gate.thresholds import THRESHOLDS_PATH, derive
 

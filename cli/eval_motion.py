@@ -9,10 +9,10 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from cli.eval_output import print_table_and_problems, write_report_json
 from rich.console import Console
 from rich.table import Table
 
+from cli.eval_output import print_table_and_problems, write_report_json
 from simcore.evaluation.motion_eval import MotionEvaluation, evaluate_motion
 
 

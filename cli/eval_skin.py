@@ -11,10 +11,10 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from cli.eval_output import print_table_and_problems, write_report_json
 from rich.console import Console
 from rich.table import Table
 
+from cli.eval_output import print_table_and_problems, write_report_json
 from simcore.evaluation.skin_eval import OUR_METHODS, SkinEvaluation, SkinRow, evaluate_skinning
 
 DEFAULT_PEERS = Path("bench/results/peers")

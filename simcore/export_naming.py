@@ -18,14 +18,14 @@ if TYPE_CHECKING:
     from simcore.pipeline import PipelineState
 
 
-def effective_preset(state: "PipelineState") -> str | None:
+def effective_preset(state: PipelineState) -> str | None:
     """The naming preset this job's export uses, or None to keep the skeleton's names."""
     if state.options.naming is not None:
         return state.options.naming
     return None if state.options.skeleton == "keep" else "mixamo"
 
 
-def apply_naming(state: "PipelineState") -> None:
+def apply_naming(state: PipelineState) -> None:
     """Rename the job's joints by its preset (see the module docstring)."""
     preset = effective_preset(state)
     if preset is None or state.skeleton is None:

@@ -30,7 +30,7 @@ class ExportInvalid(SimcoreError):
     code = "export_invalid"
 
 
-def _write_glbs(state: "PipelineState", progress: "StageProgress") -> list[Path]:
+def _write_glbs(state: PipelineState, progress: StageProgress) -> list[Path]:
     from simcore.io.glb_rig_writer import write_rigged_glb
 
     mesh, k = state.mesh, int(state.options.max_influences)
@@ -53,7 +53,7 @@ def _write_glbs(state: "PipelineState", progress: "StageProgress") -> list[Path]
     return written
 
 
-def _write_usds(state: "PipelineState", progress: "StageProgress") -> list[Path]:
+def _write_usds(state: PipelineState, progress: StageProgress) -> list[Path]:
     from simcore.io.usd_skel_writer import write_usd_skel
 
     k = int(state.options.max_influences)
@@ -76,7 +76,7 @@ def _write_usds(state: "PipelineState", progress: "StageProgress") -> list[Path]
     return sorted({p for p in written if p.suffix.startswith(".usd")})
 
 
-def _write_fbxs(state: "PipelineState", glbs: list[Path]) -> None:
+def _write_fbxs(state: PipelineState, glbs: list[Path]) -> None:
     """rigged.fbx / animated.fbx from the validated GLBs when options.fbx asks; a missing writer is a warning."""
     from simcore.io.fbx_export import blender_python, write_fbx
 
@@ -96,7 +96,7 @@ def _write_fbxs(state: "PipelineState", glbs: list[Path]) -> None:
                                                                    "bytes": result.path.stat().st_size}
 
 
-def _validate(state: "PipelineState", glbs: list[Path], usds: list[Path]) -> None:
+def _validate(state: PipelineState, glbs: list[Path], usds: list[Path]) -> None:
     from simcore.io.gltf_validate import ValidatorUnavailable, validate_gltf_files
     from simcore.io.usd_validate import validate_usd_file
 
@@ -119,7 +119,7 @@ def _validate(state: "PipelineState", glbs: list[Path], usds: list[Path]) -> Non
         raise ExportInvalid("exported files failed validation: " + "; ".join(failures))
 
 
-def run(state: "PipelineState", progress: "StageProgress") -> None:
+def run(state: PipelineState, progress: StageProgress) -> None:
     """Write, validate and register every export this job's state supports."""
     if state.options.stages is not None and "export" not in state.options.stages:
         return

@@ -48,12 +48,12 @@ class PipelineState:
     workdir: Path
     report: dict[str, Any] = field(default_factory=dict)
     artifacts: dict[str, Path] = field(default_factory=dict)
-    mesh: "IngestedMesh | None" = None
-    skeleton: "Skeleton | None" = None
-    ground_faces: "np.ndarray | None" = None  # (F,) bool: ground-plane triangles, left out of skeleton and skinning
-    weights: "sp.csr_matrix | None" = None  # (V, J) float32, rows sum to 1
-    animation: "JointAnimation | None" = None
-    refined_frames: "np.ndarray | None" = None  # (T, V, 3) float32 simulated vertex positions
+    mesh: IngestedMesh | None = None
+    skeleton: Skeleton | None = None
+    ground_faces: np.ndarray | None = None  # (F,) bool: ground-plane triangles, left out of skeleton and skinning
+    weights: sp.csr_matrix | None = None  # (V, J) float32, rows sum to 1
+    animation: JointAnimation | None = None
+    refined_frames: np.ndarray | None = None  # (T, V, 3) float32 simulated vertex positions
     stage: str = "ingest"  # the stage running now: where warnings come from
 
     def warn(self, message: str, *, code: str = "notice", figure: float | None = None,

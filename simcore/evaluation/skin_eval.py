@@ -29,9 +29,9 @@ from simcore.errors import InvalidInput, SimcoreError
 from simcore.evaluation.assets import rigged_assets
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset
+from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
-from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
 from simcore.skinning.predict import compute_weights
 
 OUR_METHODS = ("auto", "learned", "geodesic", "heat")

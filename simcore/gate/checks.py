@@ -36,7 +36,7 @@ class QualityGateFailed(SimcoreError):
 class _Judge:
     """Compares one stage's figures with their thresholds, writing warnings into the report."""
 
-    def __init__(self, state: "PipelineState", stage: str) -> None:
+    def __init__(self, state: PipelineState, stage: str) -> None:
         self.state, self.stage = state, stage
         self.hard: list[dict[str, Any]] = []
 
@@ -77,13 +77,13 @@ def _deformation(judge: _Judge, series: DeformationSeries, prefix: str) -> dict[
     return out
 
 
-def _body_faces(state: "PipelineState") -> np.ndarray:
+def _body_faces(state: PipelineState) -> np.ndarray:
     """The mesh's faces but a ground plane's (it is bound rigidly to the root)."""
     faces = state.mesh.faces
     return faces if state.ground_faces is None else faces[~state.ground_faces]
 
 
-def check_skeleton(state: "PipelineState", judge: _Judge) -> dict[str, Any] | None:
+def check_skeleton(state: PipelineState, judge: _Judge) -> dict[str, Any] | None:
     if state.skeleton is None or state.mesh is None:
         return None
     fig = skeleton_figures(state.skeleton, state.mesh.vertices, _body_faces(state))
@@ -94,7 +94,7 @@ def check_skeleton(state: "PipelineState", judge: _Judge) -> dict[str, Any] | No
     return fig
 
 
-def check_weights(state: "PipelineState", judge: _Judge) -> dict[str, Any] | None:
+def check_weights(state: PipelineState, judge: _Judge) -> dict[str, Any] | None:
     if state.weights is None or state.mesh is None:
         return None
     fig = weight_figures(state.weights, np.unique(state.mesh.faces))
@@ -106,19 +106,19 @@ def check_weights(state: "PipelineState", judge: _Judge) -> dict[str, Any] | Non
     return fig
 
 
-def _lbs_blocks(state: "PipelineState"):  # noqa: ANN202 - an iterator of (t, V, 3) arrays
+def _lbs_blocks(state: PipelineState):  # noqa: ANN202 - an iterator of (t, V, 3) arrays
     from simcore.motion.quality import skin_matrices
 
     return lbs_blocks(state.mesh.vertices, state.weights, skin_matrices(state.skeleton, state.animation))
 
 
-def check_animation(state: "PipelineState", judge: _Judge) -> dict[str, Any] | None:
+def check_animation(state: PipelineState, judge: _Judge) -> dict[str, Any] | None:
     if state.animation is None or state.weights is None or state.mesh is None:
         return None
     return _deformation(judge, deformation_series(state.mesh.vertices, _body_faces(state), _lbs_blocks(state)), "")
 
 
-def _tear(state: "PipelineState") -> tuple[float, int]:
+def _tear(state: PipelineState) -> tuple[float, int]:
     """Largest refined-vs-LBS displacement over the vertex's limb radius, and its frame."""
     frames = state.refined_frames
     radius = bone_radii(state.skeleton, state.mesh.vertices, state.weights)
@@ -133,7 +133,7 @@ def _tear(state: "PipelineState") -> tuple[float, int]:
     return worst, frame
 
 
-def check_refinement(state: "PipelineState", judge: _Judge) -> dict[str, Any] | None:
+def check_refinement(state: PipelineState, judge: _Judge) -> dict[str, Any] | None:
     if state.refined_frames is None or state.animation is None or state.mesh is None:
         return None
     report = state.report.get("refine", {})
@@ -156,12 +156,12 @@ def check_refinement(state: "PipelineState", judge: _Judge) -> dict[str, Any] | 
     return fig
 
 
-CHECKS: dict[str, Callable[["PipelineState", _Judge], dict[str, Any] | None]] = {
+CHECKS: dict[str, Callable[[PipelineState, _Judge], dict[str, Any] | None]] = {
     "skeleton": check_skeleton, "skin": check_weights, "motion": check_animation, "refine": check_refinement,
 }
 
 
-def check_stage(stage: str, state: "PipelineState") -> None:
+def check_stage(stage: str, state: PipelineState) -> None:
     """Run stage `stage`'s checks (if it has any); raise QualityGateFailed on a hard failure in "fail" mode."""
     check = CHECKS.get(stage)
     if check is None:

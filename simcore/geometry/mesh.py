@@ -32,6 +32,6 @@ class IngestedMesh:
     faces: np.ndarray
     glb: bytes
     scale: float = 1.0
-    source_rig: "RiggedAsset | None" = None
-    source_doc: "GltfDocument | None" = None
+    source_rig: RiggedAsset | None = None
+    source_doc: GltfDocument | None = None
     stats: dict[str, Any] = field(default_factory=dict)

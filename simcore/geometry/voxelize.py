@@ -100,7 +100,7 @@ def solid_voxels(vertices: np.ndarray, faces: np.ndarray, resolution: int = 64, 
     shell = ndimage.binary_dilation(grid.surface, iterations=close_radius) if close_radius else grid.surface
     labels, _ = ndimage.label(~shell)
     border = unique_ints(np.concatenate([labels[[0, -1]].ravel(), labels[:, [0, -1]].ravel(), labels[:, :, [0, -1]].ravel()]))
-    inside = ~np.isin(labels, border[border > 0]) 
+    inside = ~np.isin(labels, border[border > 0])
     if close_radius:
         inside = ndimage.binary_erosion(inside, iterations=close_radius, border_value=0)
     grid.occupancy = inside | grid.surface

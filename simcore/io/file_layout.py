@@ -37,7 +37,7 @@ def file_weights(weights: sp.spmatrix, order: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix(weights)[:, order]
 
 
-def file_animation(skeleton: Skeleton, written: Skeleton, animation: "JointAnimation") -> "JointAnimation":
+def file_animation(skeleton: Skeleton, written: Skeleton, animation: JointAnimation) -> JointAnimation:
     """`animation` (locals under `skeleton`'s parents) as locals under `written`'s parents. Joints whose parent is
     the same keep their tracks as they are; a re-parented joint (an upload's extra root) gets its world track
     expressed in its file parent's frame (the world for a root)."""

@@ -105,7 +105,7 @@ def write_rigged_glb(
     weights: sp.spmatrix,
     *,
     max_influences: int = 4,
-    animation: "JointAnimation | None" = None,
+    animation: JointAnimation | None = None,
     morph_frames: np.ndarray | None = None,
     max_morph_targets: int = 256,
     out_path: Path | None = None,

@@ -98,7 +98,7 @@ class GltfDocument:
     dropped_images: list[str] = field(default_factory=list)  # external image URIs removed unread (gltf_images)
 
     @classmethod
-    def from_bytes(cls, data: bytes, *, decode_draco: bool = True) -> "GltfDocument":
+    def from_bytes(cls, data: bytes, *, decode_draco: bool = True) -> GltfDocument:
         """Parse GLB or .gltf bytes; resolve buffers from the BIN chunk or data: URIs only.
 
         decode_draco: decode Draco-compressed primitives (the worker reads geometry); the API's upload check

@@ -31,7 +31,7 @@ def _decode(blob: bytes, where: str):
                            code="invalid_gltf", field="mesh") from exc
 
 
-def decompress_draco(doc: "GltfDocument") -> int:
+def decompress_draco(doc: GltfDocument) -> int:
     """Decode every Draco primitive of `doc` in place; returns how many were decoded."""
     from simcore.io.gltf_document import COMPONENT_DTYPES, TYPE_WIDTHS  # a cycle at import time, not at call time
 

@@ -145,7 +145,7 @@ def _define_blend_shapes(stage, mesh, binding, doc, prim: dict, gltf_mesh: dict)
     binding.CreateBlendShapeTargetsRel().SetTargets(paths)
 
 
-def _define_animation(stage, skeleton: Skeleton, joints: list[str], animation: "JointAnimation") -> str:
+def _define_animation(stage, skeleton: Skeleton, joints: list[str], animation: JointAnimation) -> str:
     from pxr import Gf, UsdSkel, Vt
 
     from simcore.io.joint_tracks import joint_tracks
@@ -173,7 +173,7 @@ def write_usd_skel(
     out_path: Path,
     *,
     max_influences: int = 4,
-    animation: "JointAnimation | None" = None,
+    animation: JointAnimation | None = None,
     refined_frames: np.ndarray | None = None,
     usdz_path: Path | None = None,
 ) -> list[Path]:

@@ -24,7 +24,7 @@ def _as_motion_error(exc: SimcoreError) -> SimcoreError:
     return exc
 
 
-def _clip_from_gltf_bytes(data: bytes, state: "PipelineState") -> MotionClip:
+def _clip_from_gltf_bytes(data: bytes, state: PipelineState) -> MotionClip:
     from simcore.io.gltf_document import GltfDocument
     from simcore.motion.gltf_clips import read_gltf_clip
 
@@ -35,7 +35,7 @@ def _clip_from_gltf_bytes(data: bytes, state: "PipelineState") -> MotionClip:
         raise _as_motion_error(exc) from None
 
 
-def load_uploaded_clip(path: Path, fmt: str | None, state: "PipelineState") -> MotionClip:
+def load_uploaded_clip(path: Path, fmt: str | None, state: PipelineState) -> MotionClip:
     """Read the uploaded motion file (bvh, glb, gltf; fbx through assimp when installed)."""
     fmt = (fmt or path.suffix.lstrip(".")).lower()
     if path.stat().st_size > MAX_MOTION_BYTES:
@@ -57,7 +57,7 @@ def load_uploaded_clip(path: Path, fmt: str | None, state: "PipelineState") -> M
                             code="unsupported_format", field="motion")
 
 
-def clip_from_mesh_upload(state: "PipelineState") -> MotionClip | None:
+def clip_from_mesh_upload(state: PipelineState) -> MotionClip | None:
     """The clip `options.motion.clip` names inside the mesh upload, moved into the ingested mesh's frame."""
     from simcore.motion.clip_frame import similarity_fit, transform_clip
     from simcore.motion.gltf_clips import read_gltf_clip
@@ -77,7 +77,7 @@ def clip_from_mesh_upload(state: "PipelineState") -> MotionClip | None:
     return clip
 
 
-def motion_report(state: "PipelineState", clip: MotionClip, result: Any) -> dict[str, Any]:
+def motion_report(state: PipelineState, clip: MotionClip, result: Any) -> dict[str, Any]:
     """JSON-ready report["motion"]: mapping, clip facts and LBS quality scores."""
     from simcore.geometry.referenced import referenced_mesh
     from simcore.motion.quality import foot_sliding, self_penetration, skin_matrices
@@ -108,7 +108,7 @@ def motion_report(state: "PipelineState", clip: MotionClip, result: Any) -> dict
     return out
 
 
-def run(state: "PipelineState", progress: "StageProgress") -> None:
+def run(state: PipelineState, progress: StageProgress) -> None:
     """Retarget the job's motion onto state.skeleton; set state.animation and report["motion"]."""
     from simcore.motion.retarget import retarget
 

@@ -56,7 +56,7 @@ class MotionClip:
     unit:      how unit_scale was chosen: a guessed unit name ("cm", "in", ...), "option" or "file".
     """
 
-    skeleton: "Skeleton"
+    skeleton: Skeleton
     animation: JointAnimation
     rest_is_standing: bool = False
     source_format: str = "bvh"

@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from simcore.pipeline import PipelineState, StageProgress
 
 
-def run(state: "PipelineState", progress: "StageProgress") -> None:
+def run(state: PipelineState, progress: StageProgress) -> None:
     opts = state.options.refine
     if not opts.enabled:
         return

@@ -18,12 +18,11 @@ import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
 from simcore.geometry.referenced import referenced_mesh
-from simcore.mpm.drivers import (DrivingPoints, animation_world_transforms, driver_positions, leaf_tips, place_drivers,
-                                  substep_drive)
+from simcore.motion.types import JointAnimation
+from simcore.mpm.drivers import DrivingPoints, animation_world_transforms, driver_positions, leaf_tips, place_drivers, substep_drive
 from simcore.mpm.materials import PRESETS, max_wave_speed, particle_lame, prototype_weights, region_stiffness, seed_prototypes
 from simcore.mpm.sampling import ParticleSample, nearest_rows, sample_volume
 from simcore.mpm.simulate import FramePlan
-from simcore.motion.types import JointAnimation
 from simcore.options import RefineOptions
 from simcore.skeleton.kinematics import bind_matrices, skinning_matrices
 from simcore.skeleton.types import Skeleton

@@ -30,7 +30,7 @@ class ParticleState:
     def arrays(self) -> tuple[wp.array, ...]:
         return (self.x, self.v, self.C, self.F)
 
-    def assign(self, other: "ParticleState") -> None:
+    def assign(self, other: ParticleState) -> None:
         """Copy values (not gradients) from another state."""
         for dst, src in zip(self.arrays(), other.arrays()):
             wp.copy(dst, src)

@@ -29,10 +29,8 @@ from simcore.skeleton.limb_rules import Ground, head_at_neck, leg_tip, with_limb
 from simcore.skeleton.medial import MedialForest, medial_forest
 from simcore.skeleton.mirror import mirror_plane
 from simcore.skeleton.section_centre import SECTION_LIMIT, centre_in_section
-from simcore.skeleton.symmetry import (MirrorTwins, body_mirror, complete_twins, lopsided_branches, mirror_report,
-                                      mirror_twins, symmetrize)
+from simcore.skeleton.symmetry import MirrorTwins, body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
-
 
 STUB_VOXELS = 0.5  # a bone shorter than this many voxels is no bone: its child joint goes
 

@@ -24,7 +24,17 @@ import numpy as np
 from simcore.errors import InvalidInput
 from simcore.skeleton.mixamo import BODY_JOINTS, HAND_JOINTS
 from simcore.skeleton.vocab import (
-    BOS, BRANCH, CLASS_TOKENS, EOS, NUM_BINS, PAD, PART_BODY, PART_HAND, SPRING, VOCAB_SIZE, token_name,
+    BOS,
+    BRANCH,
+    CLASS_TOKENS,
+    EOS,
+    NUM_BINS,
+    PAD,
+    PART_BODY,
+    PART_HAND,
+    SPRING,
+    VOCAB_SIZE,
+    token_name,
 )
 
 BODY_COORDS = 3 * len(BODY_JOINTS)

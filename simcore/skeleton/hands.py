@@ -18,11 +18,11 @@ import numpy as np
 
 from simcore.arrays import unique_ints
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
-from simcore.skeleton.geometric import rank_bodies
-from simcore.skeleton.inside import snap_inside
-from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
-from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.finger_template import template_fingers
+from simcore.skeleton.geometric import rank_bodies
+from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
+from simcore.skeleton.inside import snap_inside
+from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import FINGERS
 
 HAND_RESOLUTION = 96  # 64 merges fingers that are a few millimetres apart (Mixamo Soldier); 128 costs 3× the time

@@ -50,7 +50,7 @@ def _tokens(skeleton: Skeleton, vertices: np.ndarray) -> tuple[dict[str, Any] | 
     }, None
 
 
-def _given_skeleton(state: "PipelineState") -> Skeleton:
+def _given_skeleton(state: PipelineState) -> Skeleton:
     """The uploaded (edited) skeleton file; it goes with `skeleton: keep`."""
     from simcore.skeleton.skeleton_file import read_skeleton_file
 
@@ -60,7 +60,7 @@ def _given_skeleton(state: "PipelineState") -> Skeleton:
     return read_skeleton_file(state.inputs.skeleton_path.read_bytes(), state.mesh.vertices)
 
 
-def run(state: "PipelineState", progress: "StageProgress") -> None:
+def run(state: PipelineState, progress: StageProgress) -> None:
     """Set state.skeleton, write skeleton.json, record report["skeleton"]."""
     options = state.options
     mesh = state.mesh

@@ -35,7 +35,17 @@ from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, bare_name, full_name
 from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skeleton.vocab import (
-    BOS, BRANCH, CLASS_TOKENS, EOS, PAD, PART_BODY, PART_HAND, SPRING, VOCAB_SIZE, dequantize, quantize,
+    BOS,
+    BRANCH,
+    CLASS_TOKENS,
+    EOS,
+    PAD,
+    PART_BODY,
+    PART_HAND,
+    SPRING,
+    VOCAB_SIZE,
+    dequantize,
+    quantize,
 )
 
 _TO_MODEL = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # model = _TO_MODEL @ ours
@@ -52,7 +62,7 @@ class Normalization:
     scale: float
 
     @classmethod
-    def from_points(cls, points: np.ndarray) -> "Normalization":
+    def from_points(cls, points: np.ndarray) -> Normalization:
         """Bounding-box centre and longest half-side of `points` (V, 3) (mesh vertices, optionally joints)."""
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         if len(p) == 0 or not np.all(np.isfinite(p)):

@@ -87,7 +87,7 @@ class Skeleton:
     def num_joints(self) -> int:
         return int(self.positions.shape[0])
 
-    def validate(self) -> "Skeleton":
+    def validate(self) -> Skeleton:
         """Raise InvalidInput unless this is one finite, acyclic, rooted tree with unique names."""
         j = self.num_joints
         if j == 0:
@@ -124,7 +124,7 @@ class Skeleton:
         child = np.flatnonzero(self.parents >= 0)
         return np.stack([self.parents[child], child], axis=1)
 
-    def reordered(self, order: np.ndarray) -> "Skeleton":
+    def reordered(self, order: np.ndarray) -> Skeleton:
         """The same tree with joints in `order` (a permutation where parents precede children)."""
         order = np.asarray(order, dtype=np.int64)
         inverse = np.empty_like(order)
@@ -138,7 +138,7 @@ class Skeleton:
         return Skeleton(self.positions[order], parents, [self.names[i] for i in order], [self.kinds[i] for i in order],
                         orient, file_order, file_parents)
 
-    def without(self, drop: np.ndarray) -> tuple["Skeleton", np.ndarray]:
+    def without(self, drop: np.ndarray) -> tuple[Skeleton, np.ndarray]:
         """(the tree of the joints not in `drop`, their indices here). drop: (J,) bool, never the root. Each kept
         joint hangs from its nearest kept ancestor, so the bones it makes with its kept children remain."""
         drop = np.asarray(drop, bool)
@@ -170,7 +170,7 @@ class Skeleton:
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> "Skeleton":
+    def from_dict(cls, data: dict) -> Skeleton:
         """Inverse of to_dict; validates."""
         orient, file_order, file_parents = (data.get(k) for k in ("orientations", "file_order", "file_parents"))
         return cls(

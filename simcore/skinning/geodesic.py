@@ -20,12 +20,12 @@ from scipy.spatial import cKDTree
 
 from simcore.arrays import unique_ints
 from simcore.geometry.segments import row_distances, segment_points
+from simcore.geometry.voxel_paths import VoxelPaths
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import joint_distances, joint_segments
 from simcore.skinning.postprocess import normalize_rows
-from simcore.geometry.voxel_paths import VoxelPaths
 
 ALPHA = 0.5  # Dionne & de Lasa falloff mix between 1/d and 1/d² (the paper's and UniRig's value)
 # Measured on the dev rigs (L1 vs artist weights, four issue assets): the plain falloff (sharpness 1) is far

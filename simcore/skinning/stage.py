@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from simcore.pipeline import PipelineState, StageProgress
 
 
-def run(state: "PipelineState", progress: "StageProgress") -> None:
+def run(state: PipelineState, progress: StageProgress) -> None:
     """Set `state.weights` ((V, J) float32 CSR) and report["skinning"] (method, scores, weight stats, seconds)."""
     if state.mesh is None or state.skeleton is None:
         raise InvalidInput("the skin stage needs the ingested mesh and a skeleton", code="missing_stage_input", field="skinning")
@@ -71,7 +71,7 @@ def run(state: "PipelineState", progress: "StageProgress") -> None:
     progress(1.0)
 
 
-def _excluded(state: "PipelineState") -> np.ndarray:
+def _excluded(state: PipelineState) -> np.ndarray:
     """(J,) bool: the joints options.exclude_joints names (glob, case-insensitive); warns of patterns that match none."""
     names = [n.lower() for n in state.skeleton.names]
     drop = np.zeros(len(names), bool)

@@ -66,7 +66,7 @@ class SkeletonSample:
                 "category": np.array(self.category)}
 
     @staticmethod
-    def from_arrays(data: dict[str, np.ndarray]) -> "SkeletonSample":
+    def from_arrays(data: dict[str, np.ndarray]) -> SkeletonSample:
         return SkeletonSample(data["points"].astype(np.float32), data["tokens"].astype(np.int64),
                               data["joints"].astype(np.float32), str(data["category"]))
 

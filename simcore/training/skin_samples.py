@@ -120,7 +120,7 @@ class SkinSample:
                 "posed": self.posed.astype(np.float16), "category": np.array(self.category)}
 
     @staticmethod
-    def from_arrays(data: dict[str, np.ndarray]) -> "SkinSample":
+    def from_arrays(data: dict[str, np.ndarray]) -> SkinSample:
         inputs = SkinInputs(data["candidates"], data["pair"].astype(np.float32), data["bone"], data["point"], data["prior"])
         return SkinSample(inputs, data["target"], data["outside"], data["moved"].astype(np.float32),
                           data["posed"].astype(np.float32), str(data["category"]))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import trimesh
+
 from tests.simcore.io.rig_export_fixtures import draco_gltf
 
 

@@ -25,7 +25,7 @@ def capsule_glb(height: float = 0.8, radius: float = 0.1, textured: bool = True)
         return trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=True), mesh
     v = mesh.vertices
     uv = np.stack([(np.arctan2(v[:, 2], v[:, 0]) / (2 * np.pi)) % 1.0, (v[:, 1] - v[:, 1].min()) / np.ptp(v[:, 1])], 1)
-    image = Image.fromarray((np.arange(48, dtype=np.uint8).reshape(4, 4, 3) * 5))
+    image = Image.fromarray(np.arange(48, dtype=np.uint8).reshape(4, 4, 3) * 5)
     mesh.visual = trimesh.visual.TextureVisuals(uv=uv, material=trimesh.visual.material.PBRMaterial(
         baseColorTexture=image, baseColorFactor=[200, 180, 160, 255]))
     data = trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=True)

@@ -18,7 +18,7 @@ SWORD = {"sword": (None, [0.35, 0.8, 0.0])}
 
 def png_bytes() -> bytes:
     out = io.BytesIO()
-    Image.fromarray((np.arange(48, dtype=np.uint8).reshape(4, 4, 3) * 5)).save(out, format="PNG")
+    Image.fromarray(np.arange(48, dtype=np.uint8).reshape(4, 4, 3) * 5).save(out, format="PNG")
     return out.getvalue()
 
 

@@ -8,10 +8,10 @@ import json
 import numpy as np
 import pytest
 import trimesh
-from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
 
 from simcore.ingest import ingest
 from simcore.io.gltf_document import GltfDocument
+from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
 
 
 @pytest.mark.parametrize("scale", [[-1.0, 1.0, 1.0], [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]])

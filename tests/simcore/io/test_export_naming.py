@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore import export_stage
 from simcore.geometry.mesh import IngestedMesh
@@ -14,6 +13,7 @@ from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, PipelineState, StageProgress
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 
 def _run(tmp_path, **options) -> PipelineState:

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore import export_stage
 from simcore.geometry.mesh import IngestedMesh
 from simcore.io import fbx_export, gltf_validate
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, PipelineState, StageProgress
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 
 def _state(tmp_path, animated: bool) -> PipelineState:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
-from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore.io.fbx_export import blender_python, write_fbx
 from simcore.io.glb_rig_writer import write_rigged_glb
@@ -15,6 +14,7 @@ from simcore.io.gltf_rig import read_rigged_asset
 from simcore.motion.fbx_convert import assimp_binary, fbx_to_glb
 from simcore.motion.gltf_clips import sample_node_worlds
 from simcore.skinning.lbs import linear_blend
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 pytestmark = [
     pytest.mark.skipif(blender_python() is None, reason="FBX writer not installed: no bpy (`make fbx-writer` "

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pygltflib
 import pytest
-from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore.io.glb_animation import morph_key_frames
 from simcore.io.glb_rig_writer import write_rigged_glb
@@ -13,6 +12,7 @@ from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_validate import validate_gltf_file
 from simcore.io.joint_tracks import joint_tracks
 from simcore.skinning.lbs import linear_blend
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 
 @pytest.fixture(scope="module")

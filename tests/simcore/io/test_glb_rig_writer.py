@@ -9,7 +9,6 @@ import pygltflib
 import pytest
 import scipy.sparse as sp
 import trimesh
-from tests.simcore.io.rig_export_fixtures import capsule_glb, chain_skeleton, falloff_weights
 from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput
@@ -19,6 +18,7 @@ from simcore.io.gltf_rig import read_rigged_asset
 from simcore.io.gltf_validate import validate_gltf_file
 from simcore.skeleton.kinematics import bind_matrices
 from simcore.skeleton.types import Skeleton
+from tests.simcore.io.rig_export_fixtures import capsule_glb, chain_skeleton, falloff_weights
 
 
 @pytest.fixture(scope="module")

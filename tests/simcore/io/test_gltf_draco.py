@@ -9,13 +9,13 @@ import DracoPy
 import numpy as np
 import pytest
 import trimesh
-from tests.simcore.io.rig_export_fixtures import draco_gltf
 
 from simcore.errors import InvalidInput, UnsupportedFormat
 from simcore.ingest import ingest
 from simcore.io.gltf_document import GltfDocument
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
+from tests.simcore.io.rig_export_fixtures import draco_gltf
 
 CAPSULE = trimesh.creation.capsule(height=0.8, radius=0.15, count=[12, 12])
 

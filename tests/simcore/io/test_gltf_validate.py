@@ -6,9 +6,9 @@ These tests fail (never skip) when node_modules/gltf-validator is absent: CI run
 from __future__ import annotations
 
 import pytest
-from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
 
 from simcore.io.gltf_validate import ValidatorUnavailable, validate_gltf_file, validate_gltf_files
+from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
 
 
 def test_valid_file_has_no_errors(tmp_path):

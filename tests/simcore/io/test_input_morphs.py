@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from tests.simcore.io.rig_export_fixtures import bend_animation, chain_skeleton, falloff_weights
 
 from simcore.ingest import ingest
 from simcore.io.glb_rig_writer import write_rigged_glb
@@ -17,6 +16,7 @@ from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_validate import validate_gltf_file
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
+from tests.simcore.io.rig_export_fixtures import bend_animation, chain_skeleton, falloff_weights
 
 CAPSULE = trimesh.creation.capsule(height=0.8, radius=0.1, count=[12, 12])
 QUARTER_Z = [0.0, 0.0, float(np.sin(np.pi / 4)), float(np.cos(np.pi / 4))]  # the node turns +X onto +Y

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
-
 from simcore.io.gltf_document import GltfDocument
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
+from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
 
 
 def _with_extensions(doc: dict) -> None:

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore.io.glb_rig_writer import write_rigged_glb
 from simcore.io.gltf_validate import node_binary
 from simcore.io.joint_tracks import joint_tracks
 from simcore.skinning.lbs import linear_blend
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 SCRIPT = Path(__file__).with_name("three_playback.mjs")
 REPO = Path(__file__).resolve().parents[3]

@@ -7,6 +7,11 @@ import zipfile
 
 import numpy as np
 import pytest
+
+from simcore.io.gltf_document import GltfDocument
+from simcore.io.usd_skel_writer import write_usd_skel
+from simcore.io.usd_validate import validate_usd_file
+from simcore.motion.timing import resample
 from tests.simcore.io.rig_export_fixtures import (
     bend_animation,
     capsule_glb,
@@ -14,11 +19,6 @@ from tests.simcore.io.rig_export_fixtures import (
     falloff_weights,
     glb_with_json,
 )
-
-from simcore.io.gltf_document import GltfDocument
-from simcore.io.usd_skel_writer import write_usd_skel
-from simcore.io.usd_validate import validate_usd_file
-from simcore.motion.timing import resample
 
 pytest.importorskip("pxr")
 

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 from simcore.io.joint_tracks import joint_tracks
 from simcore.io.usd_skel_writer import joint_paths, write_usd_skel
 from simcore.io.usd_validate import validate_usd_file
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.lbs import linear_blend
+from tests.simcore.io.rig_export_fixtures import bend_animation, capsule_glb, chain_skeleton, falloff_weights
 
 pxr = pytest.importorskip("pxr")
 

@@ -12,7 +12,6 @@ from simcore.errors import InvalidInput, LimitExceeded
 from simcore.io import bvh
 from simcore.io.bvh import parse_bvh
 from simcore.skeleton import kinematics
-
 from tests.simcore.motion.motion_samples import _depth_first, bvh_text, humanoid
 
 SMALL = """HIERARCHY

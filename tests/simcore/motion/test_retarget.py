@@ -14,7 +14,6 @@ from simcore.motion.types import JointAnimation, MotionClip
 from simcore.options import MotionOptions
 from simcore.skeleton import kinematics
 from simcore.skeleton.types import Skeleton
-
 from tests.simcore.motion.motion_samples import bvh_text, humanoid
 
 

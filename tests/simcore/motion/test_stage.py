@@ -14,7 +14,6 @@ from simcore.io.gltf_rig import read_rigged_asset
 from simcore.motion import fbx_convert, stage
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, PipelineState, StageProgress
-
 from tests.simcore.motion.motion_samples import body_cloud, bvh_text, humanoid
 
 

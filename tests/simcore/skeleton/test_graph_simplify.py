@@ -9,8 +9,8 @@ from scipy.spatial import cKDTree
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
 from simcore.skeleton.geometric import GeometricParams, geometric_skeleton
-from simcore.skeleton.limb_rules import with_limb_root
 from simcore.skeleton.graph_simplify import limb_exit, prune_spurs
+from simcore.skeleton.limb_rules import with_limb_root
 from simcore.skeleton.mirror import MirrorPlane, mirror_plane
 
 

@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-from tests.simcore.io.rig_export_fixtures import capsule_glb, chain_skeleton
 
 from simcore.errors import InvalidInput
 from simcore.io.gltf_document import GltfDocument
@@ -14,6 +13,7 @@ from simcore.io.gltf_rig import read_rigged_asset
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
 from simcore.skeleton.skeleton_file import read_skeleton_file
+from tests.simcore.io.rig_export_fixtures import capsule_glb, chain_skeleton
 
 VERTICES = np.array([[-0.1, -0.5, -0.1], [0.1, 0.5, 0.1]])
 

@@ -9,7 +9,17 @@ from simcore.errors import InvalidInput
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer, strip_padding
 from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skeleton.vocab import (
-    BOS, BRANCH, CLASS_TOKENS, EOS, PAD, PART_BODY, PART_HAND, SPRING, VOCAB_SIZE, dequantize, quantize,
+    BOS,
+    BRANCH,
+    CLASS_TOKENS,
+    EOS,
+    PAD,
+    PART_BODY,
+    PART_HAND,
+    SPRING,
+    VOCAB_SIZE,
+    dequantize,
+    quantize,
 )
 from tests.simcore.skeleton.skeleton_samples import dev_skeletons, random_tree
 

@@ -13,8 +13,7 @@ from simcore.io.gltf_rig import read_rigged_asset
 from simcore.skeleton.geometric import geometric_skeleton
 from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
-from simcore.skeleton.symmetry import (body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins,
-                                      symmetrize)
+from simcore.skeleton.symmetry import body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import Skeleton
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
