@@ -192,7 +192,8 @@ def main() -> None:
             rows.append(measure(n, grid, sparse, steps, back if threads is None else 0, device, threads))
             r = rows[-1]
             bwd = f"{r['backward_ms']:8.2f}" if "backward_ms" in r else "       -"
-            print(f"{r['variant']:>6} {r['threads']:>2} thr {n:>7} {grid:>4}³  fwd {r['forward_ms']:8.2f} ms (min {r['forward_ms_min']:6.2f})  bwd {bwd} ms  "
+            print(f"{r['variant']:>6} {r['threads']:>2} thr {n:>7} {grid:>4}³  "
+                  f"fwd {r['forward_ms']:8.2f} ms (min {r['forward_ms_min']:6.2f})  bwd {bwd} ms  "
                   f"{r['forward_particle_substeps_per_s'] / 1e6:6.2f} M p·substep/s  active blocks {r['active_blocks'] or 'all'}/{r['total_blocks']}",
                   flush=True)
     sparse20 = rows[0]  # 20k, sparse, every core: what the refine stage runs

@@ -15,7 +15,10 @@ import json
 import os
 import platform
 import time
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import trimesh
@@ -29,6 +32,7 @@ REPO = Path(__file__).resolve().parents[1]
 DEV = Path(os.environ.get("RIGFORGE_DEV_ASSETS", REPO.parent / "shared" / "assets" / "dev"))
 TARGET_VERTICES = 50_000
 BUDGET_S = 5.0
+T = TypeVar("T")
 
 
 def meshes() -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -47,8 +51,8 @@ def meshes() -> dict[str, tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def timed(fn, repeat: int) -> tuple[float, object]:
-    times, result = [], None
+def timed(fn: Callable[[], T], repeat: int) -> tuple[float, T]:
+    times: list[float] = []
     for _ in range(repeat):
         started = time.perf_counter()
         result = fn()
@@ -62,13 +66,16 @@ def main() -> None:
     args = parser.parse_args()
     from skimage.morphology import skeletonize
 
+    def reference(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+        return skeletonize(solid_voxels(v, f, GeometricParams().resolution).occupancy)
+
     rows = []
     for name, (v, f) in meshes().items():
-        ref_s, _ = timed(lambda: skeletonize(solid_voxels(v, f, GeometricParams().resolution).occupancy), args.repeat)
+        ref_s, _ = timed(partial(reference, v, f), args.repeat)
         rows.append({"mesh": name, "vertices": len(v), "faces": len(f), "method": "reference: voxelise + skeletonize",
                      "seconds": round(ref_s, 3), "joints": None})
         for method in ("geometric", "auto"):
-            secs, pred = timed(lambda: predict_skeleton(v, f, method=method), args.repeat)
+            secs, pred = timed(partial(predict_skeleton, v, f, method=method), args.repeat)
             rows.append({"mesh": name, "vertices": len(v), "faces": len(f), "method": f"{method} → {pred.method}",
                          "seconds": round(secs, 3), "joints": pred.skeleton.num_joints,
                          "within_budget": secs <= BUDGET_S})

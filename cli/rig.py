@@ -47,5 +47,5 @@ def rig(
     except SimcoreError as exc:
         typer.echo(f"error [{exc.code}]{f' ({exc.field})' if exc.field else ''}: {exc}", err=True)
         raise typer.Exit(1) from exc
-    for name, path in sorted(state.artifacts.items()):
+    for _name, path in sorted(state.artifacts.items()):
         typer.echo(f"{path}  ({path.stat().st_size} bytes)")

@@ -60,7 +60,8 @@ def _load_other(data: bytes, fmt: str) -> tuple[np.ndarray, np.ndarray, list]:
     try:
         scene = trimesh.load(io.BytesIO(data), file_type=fmt, force="scene", process=False)
     except Exception as exc:  # noqa: BLE001 - trimesh raises many types for broken files
-        raise InvalidInput(f"the {fmt.upper()} file could not be read: {type(exc).__name__}: {exc}"[:500], code="unreadable_mesh", field="mesh") from exc
+        message = f"the {fmt.upper()} file could not be read: {type(exc).__name__}: {exc}"[:500]
+        raise InvalidInput(message, code="unreadable_mesh", field="mesh") from exc
     geoms = []
     for node in scene.graph.nodes_geometry:
         transform, name = scene.graph[node]

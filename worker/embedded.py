@@ -2,9 +2,10 @@
 
 A supervisor thread restarts the worker when it dies or stops consuming. Consuming is judged from the job
 rows (the one source of truth), so it catches any wedge, whatever its cause: a ready worker is stuck when
-jobs wait in `queued`, none runs under a live lease and none was claimed for `worker_stall_seconds` on end. Killing a prefork pool child on kombu's filesystem:// transport (what the OOM killer does)
-can leave the worker alive but consuming nothing; the restart is what recovers from it. The worker runs in
-its own process group, and the whole group is killed on stop, so no pool child outlives `serve`.
+jobs wait in `queued`, none runs under a live lease and none was claimed for `worker_stall_seconds` on end.
+Killing a prefork pool child on kombu's filesystem:// transport (what the OOM killer does) can leave the
+worker alive but consuming nothing; the restart is what recovers from it. The worker runs in its own
+process group, and the whole group is killed on stop, so no pool child outlives `serve`.
 """
 
 from __future__ import annotations

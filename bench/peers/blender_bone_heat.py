@@ -113,8 +113,8 @@ def bone_heat(job: Path, out: Path) -> None:
         for g in v.groups:
             if g.group in col:
                 heat[v.index, col[g.group]] = g.weight
-    np.savez_compressed(out, heat=heat, joints_matched=np.int64(len(found)), seconds=np.float64(seconds), fit=np.str_(fit), fit_residual=np.float64(residual),
-                        scale=np.float64(scale), imported=coords, placed=placed)
+    np.savez_compressed(out, heat=heat, joints_matched=np.int64(len(found)), seconds=np.float64(seconds), fit=np.str_(fit),
+                        fit_residual=np.float64(residual), scale=np.float64(scale), imported=coords, placed=placed)
 
 
 if __name__ == "__main__":

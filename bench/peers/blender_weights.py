@@ -145,7 +145,8 @@ def blender_asset(python: Path, name: str, source: Path, doc: GltfDocument, asse
     size = float(np.ptp(result["placed"], axis=0).max()) if len(result["placed"]) else 1.0
     entry = {"status": status, "unweighted_share": round(unweighted, 4), "seconds": round(float(result["seconds"]), 3),
              "process_seconds": round(wall, 2),
-             "joints_matched": f"{int(result['joints_matched'])}/{shape[1]}", "fit": str(result["fit"]), "fit_residual": float(f"{float(result['fit_residual']):.2g}"),
+             "joints_matched": f"{int(result['joints_matched'])}/{shape[1]}", "fit": str(result["fit"]),
+             "fit_residual": float(f"{float(result['fit_residual']):.2g}"),
              "imported_scale": round(float(result["scale"]), 4), "size": round(size, 4),
              "import_match": import_match(result["placed"], result["imported"], size), "messages": messages}
     np.savez_compressed(out / f"{name}.npz", weights=weights.astype(np.float32), status=np.str_(status),

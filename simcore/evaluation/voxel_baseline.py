@@ -29,6 +29,6 @@ def voxel_skeleton_graph(vertices: np.ndarray, faces: np.ndarray, resolution: in
         ijk = np.argwhere(grid.occupancy)
     lookup = {tuple(v): k for k, v in enumerate(ijk.tolist())}
     offsets = [(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) if (a, b, c) > (0, 0, 0)]
-    edges = [(k, lookup[(i + a, j + b, l + c)]) for k, (i, j, l) in enumerate(ijk.tolist())
-             for a, b, c in offsets if (i + a, j + b, l + c) in lookup]
+    edges = [(k, lookup[(i + a, j + b, m + c)]) for k, (i, j, m) in enumerate(ijk.tolist())
+             for a, b, c in offsets if (i + a, j + b, m + c) in lookup]
     return grid.centers(ijk), np.asarray(edges, dtype=np.int64).reshape(-1, 2)

@@ -98,7 +98,9 @@ def deformation_series(rest: np.ndarray, faces: np.ndarray, blocks: Iterable[np.
         high.append(p[1])
         if enclosed:
             vol.append(_centred_volumes(frames, faces) / rest_volume)
-    cat = (lambda parts: np.concatenate(parts) if parts else np.zeros(0))
+    def cat(parts: list[np.ndarray]) -> np.ndarray:
+        return np.concatenate(parts) if parts else np.zeros(0)
+
     return DeformationSeries(cat(low), cat(high), cat(vol) if enclosed else None)
 
 

@@ -1,8 +1,9 @@
 """Rigged-asset extraction from a GltfDocument: bind-pose mesh, skin skeleton and per-vertex weights.
 
 Conventions follow the glTF skinning model: vertices are the skinned primitives' POSITION in mesh
-space (meshes parented under a joint are moved there and follow that joint), joint bind positions are the translations of inverse(inverseBindMatrix). Joint parents are the
-nearest ancestor node that is also a joint of the same skin.
+space (meshes parented under a joint are moved there and follow that joint), joint bind positions are the
+translations of inverse(inverseBindMatrix). Joint parents are the nearest ancestor node that is also a
+joint of the same skin.
 """
 
 from __future__ import annotations

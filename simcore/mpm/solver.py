@@ -74,7 +74,8 @@ class MPMSolver:
 
     particle_mass: kg per particle; particle_volume: m³ per particle; sparse: update only active 4³ blocks
     (False runs the dense reference of the same kernels; None picks sparse on CPU and dense on CUDA, where
-    bench/mpm.py measured the dense pass faster: launch-bound, 0.16 vs 0.28 ms per substep at 20k/64³ on an H100); gravity: m/s²; drive_gain: how strongly driver
+    bench/mpm.py measured the dense pass faster: launch-bound, 0.16 vs 0.28 ms per substep at 20k/64³ on an H100);
+    gravity: m/s²; drive_gain: how strongly driver
     weight on a node replaces its velocity (weight × gain, capped at 1); bound: wall band in nodes;
     v_max: velocity clamp in m/s (None: 0.5 dx/dt per substep, the CFL limit).
     threads: CPU cores for the particle passes (None: every core up to MAX_CPU_THREADS on CPU without gradients,

@@ -33,7 +33,8 @@ def test_200000_shallow_nodes_check_in_linear_time():
     assert time.perf_counter() - started < 5.0
 
 
-@pytest.mark.parametrize("nodes", [[{"children": [1]}, {"children": [0]}], [{"children": [0]}], [{"children": [1]}, {"children": [2]}, {"children": [1]}]],
+@pytest.mark.parametrize("nodes", [[{"children": [1]}, {"children": [0]}], [{"children": [0]}],
+                                   [{"children": [1]}, {"children": [2]}, {"children": [1]}]],
                          ids=["two-cycle", "self", "three-with-cycle"])
 def test_cycles_are_invalid(nodes):
     with pytest.raises(InvalidInput):

@@ -63,7 +63,7 @@ def test_rotation_orders_match_scipy_intrinsic(order):
     text = bvh_text(skel, roots, angles, [order] * skel.num_joints)
     clip = parse_bvh(text, unit_scale=0.01)
     names = clip.skeleton.names
-    for k, j in enumerate(_depth_first(skel)):
+    for j in _depth_first(skel):
         got = clip.animation.rotations[:, names.index(skel.names[j])]
         want = Rotation.from_euler(order, angles[:, j], degrees=True).as_quat()
         assert np.allclose(np.abs(np.sum(got * want, axis=1)), 1.0, atol=1e-9), (order, skel.names[j])

@@ -60,7 +60,8 @@ def test_fox_clip_reproduces_artist_skinning(fox):
     world = kinematics.global_transforms(clip.skeleton, kinematics.compose(clip.animation.rotations, clip.animation.translations))
     ours = linear_blend(asset.vertices, asset.weights, kinematics.skinning_matrices(clip.skeleton, world)[::10])
     times = np.arange(clip.animation.num_frames)[::10] / clip.animation.fps
-    artist_world = sample_node_worlds(fox, 0, times + min(fox.accessor(s["input"]).min() for s in fox.items("animations")[0]["samplers"]), asset.joint_nodes)
+    first_key = min(fox.accessor(s["input"]).min() for s in fox.items("animations")[0]["samplers"])
+    artist_world = sample_node_worlds(fox, 0, times + first_key, asset.joint_nodes)
     artist = linear_blend(asset.vertices, asset.weights, artist_world @ np.linalg.inv(asset.bind_matrices))
     assert np.abs(ours - artist).max() < 1e-4 * np.ptp(asset.vertices, axis=0).max()
 

@@ -183,7 +183,6 @@ def _pulled_share(vertices: np.ndarray, faces: np.ndarray, picked) -> np.ndarray
     assert raw.parents.tolist() == pulled.parents.tolist()
     leaf = np.setdiff1d(np.arange(raw.num_joints), raw.parents)
     leaf = leaf[picked(raw.positions[leaf])]
-    inner = np.setdiff1d(np.arange(raw.num_joints), leaf)
     step = raw.positions[raw.parents[leaf]] - raw.positions[leaf]
     return np.einsum("ij,ij->i", pulled.positions[leaf] - raw.positions[leaf], step) / np.einsum("ij,ij->i", step, step)
 
