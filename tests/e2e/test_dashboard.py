@@ -121,7 +121,10 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
     assert job_progress == sorted(job_progress) and job_progress[-1] == 100, job_progress
     assert "done" in page.inner_text("#job-stage")
 
-    # report tables
+    # plain summary on top, report tables folded below it
+    summary = page.inner_text("#job-summary")
+    assert "Skeleton: RigForge" in summary and "descriptive joint names" in summary and "warning" in summary, summary
+    page.click("#report-details > summary")
     page.wait_for_selector("#report-mesh")
     assert "'*_nope' matches no joint" in page.inner_text("#report-warnings")
     assert "1,728" in page.inner_text("#report-mesh")  # fox.glb vertices

@@ -2,6 +2,7 @@
 import { ApiError, api, type Job } from "../api/client";
 import { isTerminal, watchJob } from "../api/job_watch";
 import { withKey } from "../api/session";
+import { jobSummary } from "../report/job_summary";
 import { reportTables, type Report } from "../report/report_tables";
 import { h, replace } from "../ui/dom";
 import { bytes, dateTime, duration } from "../ui/format";
@@ -26,11 +27,12 @@ function worstFrames(job: Job, report: Report | null): WorstFrame[] {
 export function jobDetailPage(root: HTMLElement, id: string): () => void {
   const head = h("div", { id: "job-head" });
   const facts = h("div", {});
+  const summaryHost = h("div", {});
   const warningsHost = h("section", { id: "warnings" });
   const viewerHost = h("section", { id: "viewer", "aria-label": "3D viewer" });
   const artifactsHost = h("section", { id: "artifacts" });
   const reportHost = h("section", { id: "report" });
-  replace(root, h("p", {}, h("a", { href: "#/jobs" }, "← Jobs")), head, facts, warningsHost, viewerHost, artifactsHost, reportHost);
+  replace(root, h("p", {}, h("a", { href: "#/jobs" }, "← Jobs")), head, summaryHost, facts, warningsHost, viewerHost, artifactsHost, reportHost);
   let stopWatch: (() => void) | null = null;
   let disposeViewer: (() => void) | null = null;
   let closed = false;
@@ -88,11 +90,13 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
     if (reportArtifact) {
       try {
         report = (await api.artifactJson(reportArtifact.url)) as Report;
-        replace(reportHost, h("h2", {}, "Report"), reportTables(report));
+        replace(reportHost, h("h2", {}, "Report"), h("details", { id: "report-details" },
+          h("summary", {}, "Research tables: mesh, skeleton and skinning quality, motion, validation, timings"), reportTables(report)));
       } catch (e) {
         replace(reportHost, h("h2", {}, "Report"), h("div", { class: "errorbox" }, `report.json could not be read: ${e instanceof Error ? e.message : e}`));
       }
     }
+    replace(summaryHost, jobSummary(job, report));
     if (closed || !job.artifacts.some((a) => a.name.endsWith(".glb"))) return;
     replace(viewerHost, h("h2", {}, "Viewer"), h("p", { class: "muted" }, "loading the viewer…"));
     const { mountViewer } = await import("../viewer/viewer_panel");
