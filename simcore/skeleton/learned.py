@@ -25,7 +25,8 @@ from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel
 from simcore.skeleton.shape_points import shape_points, surface_points
-from simcore.skeleton.symmetry import body_mirror
+from simcore.skeleton.section_centre import centre_in_section
+from simcore.skeleton.symmetry import body_mirror, mirror_twins, symmetrize
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
@@ -35,6 +36,7 @@ WEIGHTS = Path(__file__).parent / "weights" / "skeleton_tokens.safetensors"
 GREEDY_CLASSES = ("articulation", "mixamo", "vroid")
 TEMPERATURE = 0.8
 SCORE_SAMPLES = 3000  # surface points the reach term is measured on
+SECTION_LIMIT = 6.0  # voxels of the 128 solid
 SOLID_RESOLUTION = 128  # joints outside are snapped to this solid: 64 left half of them outside a 128-voxel one
 
 
@@ -74,6 +76,19 @@ def load_skeleton_model(path: Path = WEIGHTS) -> SkeletonTokenModel:
     return model
 
 
+def refined(skeleton: Skeleton, shape: ShapeContext) -> tuple[Skeleton, int]:
+    """The decoded skeleton placed in the solid as the geometric method places its joints: chain joints towards
+    their limb's cross-section centre (by at most SECTION_LIMIT voxels: decoded joints are a few bins off), mirror
+    twins averaged on a symmetric mesh, joints still outside moved to the nearest inside voxel. Returns it and
+    the number of joints the last step moved."""
+    pos = centre_in_section(skeleton.positions, skeleton.parents, shape.grid, SECTION_LIMIT)
+    if shape.mirror is not None:
+        pos = symmetrize(pos, mirror_twins(pos, skeleton.parents, shape.grid, shape.mirror, skeleton.names))
+    inside = snap_inside(shape.grid, pos)
+    moved = int(np.count_nonzero(np.any(inside != pos, axis=1)))
+    return Skeleton(inside, skeleton.parents, skeleton.names, skeleton.kinds), moved
+
+
 def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = 16, seed: int = 0,
                      model_path: Path | None = None) -> tuple[Skeleton, dict]:
     """The best of `candidates` decoded skeletons for a mesh (vertices (V, 3) metres, +Y up; faces (F, 3)), in the
@@ -99,10 +114,7 @@ def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int
     skeletons = [tokenizer.decode(tokens, norm) for tokens, _ in decoded]
     scores = [score_candidate(s, shape, log_prob) for s, (_, log_prob) in zip(skeletons, decoded)]
     best = int(np.argmax([s.total for s in scores]))
-    chosen = skeletons[best]
-    snapped = snap_inside(shape.grid, chosen.positions)
-    moved = int(np.count_nonzero(np.any(snapped != chosen.positions, axis=1)))
-    chosen = Skeleton(snapped, chosen.parents, chosen.names, chosen.kinds)
+    chosen, moved = refined(skeletons[best], shape)
     report = {
         "chosen": best, "joints": chosen.num_joints, "moved_inside": moved, "symmetric": shape.mirror is not None,
         "candidates": [{"class": c, "joints": s.num_joints, **sc.to_dict()}

@@ -12,7 +12,9 @@ import torch
 
 from simcore.skeleton.grammar import GrammarState, SkeletonGrammar
 from simcore.skeleton.learned_model import SkeletonTokenModel, next_slot
-from simcore.skeleton.vocab import BOS, CLASS_TOKENS, PAD
+from simcore.skeleton.vocab import BOS, CLASS_TOKENS, PAD, VOCAB_SIZE
+
+PAD_ONLY = np.arange(VOCAB_SIZE) == PAD  # a finished sequence's row: <pad> (ignored; it keeps the batch in step)
 
 
 def decode_tokens(model: SkeletonTokenModel, points: torch.Tensor, classes: list[str], grammar: SkeletonGrammar, *,
@@ -35,7 +37,7 @@ def decode_tokens(model: SkeletonTokenModel, points: torch.Tensor, classes: list
         logits, caches = model.start(points[None].expand(count, -1, -1), prompt, slots)
         position = prompt.shape[1]
         while True:
-            mask = torch.from_numpy(np.stack([grammar.allowed(s) if not s.complete else _pad_only(grammar) for s in states]))
+            mask = torch.from_numpy(np.stack([grammar.allowed(s) if not s.complete else PAD_ONLY for s in states]))
             scores = torch.log_softmax(logits.masked_fill(~mask, float("-inf")), dim=-1)
             if temperature > 0:
                 chosen = torch.multinomial(torch.softmax(scores / temperature, dim=-1), 1, generator=generator)[:, 0]
@@ -53,9 +55,3 @@ def decode_tokens(model: SkeletonTokenModel, points: torch.Tensor, classes: list
             position += 1
     return [(np.asarray(s, dtype=np.int64), float(lp) / (len(s) - 2)) for s, lp in zip(sequences, log_prob)]
 
-
-def _pad_only(grammar: SkeletonGrammar) -> np.ndarray:
-    """A finished sequence's row: <pad> (ignored; it keeps the batch in step)."""
-    mask = np.zeros(grammar.allowed(grammar.initial()).shape, dtype=bool)
-    mask[PAD] = True
-    return mask
