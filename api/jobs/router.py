@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import asyncio
 import json
+import tempfile
 import uuid
-from collections.abc import AsyncIterator
+import zipfile
+from collections.abc import AsyncIterator, Iterator
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, File, Form, Header, Query, Request, UploadFile
+from fastapi import APIRouter, Depends, File, Form, Header, Query, Request, Response, UploadFile
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse, StreamingResponse
 from pydantic import ValidationError
@@ -138,6 +140,44 @@ def download_artifact(job: OwnedJob, name: str) -> FileResponse:
     if artifact is None:
         raise Problem(404, "artifact_not_found", f"job has no artifact {name!r}")
     return FileResponse(artifact.path, media_type=artifact.media_type, filename=artifact.name)
+
+
+@router.get("/{job_id}/artifacts.zip", summary="Download every artifact as one zip", response_class=StreamingResponse)
+def download_all(job: OwnedJob) -> StreamingResponse:
+    if not job.artifacts:
+        raise Problem(404, "artifact_not_found", "job has no artifacts")
+    spool = tempfile.TemporaryFile()  # written first: a zip's directory comes at its end
+    with zipfile.ZipFile(spool, "w", zipfile.ZIP_DEFLATED) as archive:
+        for artifact in job.artifacts:
+            archive.write(artifact.path, arcname=artifact.name)
+    spool.seek(0)
+
+    def chunks() -> Iterator[bytes]:
+        with spool:
+            while data := spool.read(1024 * 1024):
+                yield data
+
+    return StreamingResponse(chunks(), media_type="application/zip",
+                             headers={"Content-Disposition": f'attachment; filename="rigforge-{job.id}.zip"'})
+
+
+@router.post("/{job_id}/rerun", status_code=202, response_model=JobOut, summary="Run a job again on the same inputs and options")
+def rerun_job(request: Request, job: OwnedJob) -> JobOut:
+    with session_scope() as session:
+        again = service.rerun_job(session, job=session.get(Job, job.id))
+        again_id = again.id
+    enqueue_job(again_id)
+    with session_scope() as session:
+        return service.to_schema(session.get(Job, again_id), base_url(request))
+
+
+@router.delete("/{job_id}", status_code=204, summary="Delete a finished job and its files")
+def delete_job(job: OwnedJob) -> Response:
+    with session_scope() as session:
+        if not service.delete_job(session, job_id=job.id, finished=state.TERMINAL):
+            raise Problem(409, "job_active", f"job is {job.status}: cancel it first")
+    LocalStorage(get_settings().storage_dir).discard(get_settings().storage_dir / "jobs" / str(job.id))
+    return Response(status_code=204)
 
 
 def _snapshot(job_id: uuid.UUID, base: str) -> dict | None:

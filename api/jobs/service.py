@@ -8,12 +8,12 @@ import json
 import uuid
 from datetime import datetime
 
-from sqlalchemy import or_, select
+from sqlalchemy import delete, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from api.jobs.schemas import ArtifactOut, InputFile, JobError, JobOut, JobWarning
-from api.models import Asset, Job
+from api.models import Artifact, Asset, Job
 from api.storage import StoredFile
 from simcore.options import JobOptions
 
@@ -73,6 +73,31 @@ def create_job(
             raise
         return earlier, False
     return job, True
+
+
+def rerun_job(session: Session, *, job: Job) -> Job:
+    """A new queued job on the same inputs (mesh, motion, skeleton file) and options as `job`."""
+    again = Job(owner_id=job.owner_id, options=dict(job.options), mesh_asset_id=job.mesh_asset_id,
+                motion_asset_id=job.motion_asset_id, skeleton_asset_id=job.skeleton_asset_id,
+                source_job_id=job.source_job_id, idempotency_key=None, request_hash=job.request_hash)
+    session.add(again)
+    session.commit()
+    return again
+
+
+def delete_job(session: Session, *, job_id: uuid.UUID, finished: tuple[str, ...]) -> bool:
+    """Delete a job in one of the `finished` statuses with its artifact rows (jobs re-skinned from it lose the
+    link); False, and nothing deleted, when it is queued or running."""
+    session.execute(update(Job).where(Job.source_job_id == job_id).values(source_job_id=None)
+                    .execution_options(synchronize_session=False))
+    session.execute(delete(Artifact).where(Artifact.job_id == job_id).execution_options(synchronize_session=False))
+    gone = session.execute(delete(Job).where(Job.id == job_id, Job.status.in_(finished))
+                           .execution_options(synchronize_session=False)).rowcount == 1
+    if gone:
+        session.commit()
+    else:
+        session.rollback()
+    return gone
 
 
 def owned_job(session: Session, *, job_id: uuid.UUID, owner_id: uuid.UUID) -> Job | None:

@@ -71,6 +71,11 @@ export const api = {
   listJobs: (query: ListJobsQuery) => call<Ok<"/api/v1/jobs", "get">>("GET", "/api/v1/jobs", { query }),
   getJob: (id: string) => call<Ok<"/api/v1/jobs/{job_id}", "get">>("GET", `/api/v1/jobs/${encodeURIComponent(id)}`),
   cancelJob: (id: string) => call<Ok<"/api/v1/jobs/{job_id}/cancel", "post", 202>>("POST", `/api/v1/jobs/${encodeURIComponent(id)}/cancel`),
+  rerunJob: (id: string) => call<Ok<"/api/v1/jobs/{job_id}/rerun", "post", 202>>("POST", `/api/v1/jobs/${encodeURIComponent(id)}/rerun`),
+  async deleteJob(id: string): Promise<void> {
+    const res = await fetch(`/api/v1/jobs/${encodeURIComponent(id)}`, { method: "DELETE", headers: authHeaders() });
+    if (res.status !== 204) throw new ApiError(toProblem(res.status, await res.text()));
+  },
   /** An artifact's bytes, fetched with the Authorization header (keeps the key out of URLs). */
   async artifactBytes(url: string): Promise<ArrayBuffer> {
     const res = await fetch(new URL(url, location.href).pathname, { headers: authHeaders() });

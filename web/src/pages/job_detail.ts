@@ -42,8 +42,20 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
     const cancel = !isTerminal(job) ? h("button", { class: "danger", id: "cancel-job", onclick: async () => {
       try { renderHead(await api.cancelJob(job.id)); } catch (e) { if (e instanceof ApiError) alert(e.message); }
     } }, "Cancel job") : null;
+    const finishedActions = isTerminal(job) ? [
+      job.artifacts.length ? h("a", { class: "button", id: "download-all", href: withKey(`/api/v1/jobs/${job.id}/artifacts.zip`),
+        download: `rigforge-${job.id}.zip` }, "Download all (zip)") : null,
+      h("button", { type: "button", id: "rerun-job", onclick: async () => {
+        try { location.hash = `#/jobs/${(await api.rerunJob(job.id)).id}`; } catch (e) { if (e instanceof ApiError) alert(e.message); }
+      } }, "Re-run"),
+      h("button", { type: "button", class: "danger", id: "delete-job", onclick: async () => {
+        if (!confirm(`Delete this job and its ${job.artifacts.length} files?`)) return;
+        try { await api.deleteJob(job.id); location.hash = "#/jobs"; } catch (e) { if (e instanceof ApiError) alert(e.message); }
+      } }, "Delete"),
+    ] : [];
     replace(head,
-      h("div", { class: "row" }, h("h1", { style: "margin:0" }, job.mesh.filename), statusBadge(job), warningsBadge(job), cancel),
+      h("div", { class: "row" }, h("h1", { style: "margin:0" }, job.mesh.filename), statusBadge(job), warningsBadge(job), cancel,
+        ...finishedActions),
       h("div", { class: "row", style: "margin:10px 0" }, h("div", { style: "width:320px" }, progressBar(job)),
         h("span", { class: "stage", id: "job-stage" }, stageText(job))),
       job.error ? h("div", { class: "errorbox", id: "job-error" }, h("strong", {}, "Failed: "), errorLine(job)) : null);

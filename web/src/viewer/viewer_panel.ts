@@ -67,6 +67,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
     title: `show ${w.model} at ${w.time.toFixed(2)} s`, onclick: () => showWorst(w) }, w.label));
   const plot: VolumePlot | null = input.volume ? volumePlot(input.volume.lbs, input.volume.refined) : null;
 
+  let disposed = false;
   const cache = new Map<string, Promise<LoadedModel>>();
   const loadArtifact = (name: string) => {
     if (!cache.has(name)) cache.set(name, api.artifactBytes(byName.get(name)!.url).then((b) => view.load(b, LABELS[name] ?? name)));
@@ -108,6 +109,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
     status.textContent = `loading ${names.join(" and ")}…`;
     try {
       const loaded = await Promise.all(models);
+      if (disposed) return;  // the page moved on while the models loaded
       const keep = view.time;
       view.show(loaded);
       pose.reset();
@@ -128,6 +130,7 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
       stage.dataset.state = "ready";
       window.rigforgeViewer!.state = "ready";
     } catch (err) {
+      if (disposed) return;
       status.textContent = `could not load: ${err instanceof Error ? err.message : err}`;
       stage.dataset.state = "error";
       window.rigforgeViewer!.state = "error";
@@ -197,5 +200,5 @@ export function mountViewer(host: HTMLElement, input: ViewerInput): () => void {
     h("p", { class: "muted" }, "signed volume relative to the rest pose per frame; physics should stay nearer 0 %"), plot.el) : null);
 
   showSelection();
-  return () => { editor?.dispose(); view.dispose(); delete window.rigforgeViewer; };
+  return () => { disposed = true; editor?.dispose(); view.dispose(); delete window.rigforgeViewer; };
 }
