@@ -39,7 +39,10 @@ def test_move_a_joint_and_reskin_as_a_linked_job(page, dashboard_server, dev_ass
     page.fill("#edit-name", "skull")
     page.press("#edit-name", "Enter")
     page.click("#edit-add")  # a new child of the head...
-    assert page.input_value("#edit-name") == "joint_new_1"
+    assert page.input_value("#edit-name") == "joint_new_1" and page.input_value("#edit-parent") == str(j)
+    page.select_option("#edit-parent", "0")  # ...re-parented to the root...
+    assert page.input_value("#edit-parent") == "0"
+    page.select_option("#edit-parent", str(j))  # ...and back
     page.click("#edit-delete")  # ...and deleted again: the head is selected once more
     assert page.input_value("#edit-name") == "skull"
     page.locator("#viewer-canvas").screenshot(path=str(ARTIFACTS / "edit-1-moved.png"))
