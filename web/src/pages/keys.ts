@@ -63,7 +63,7 @@ function renderKeys(root: HTMLElement, message: Node | null): void {
     createForm.addEventListener("submit", async (e) => {
       e.preventDefault();
       try {
-        const res = await api.createKey({ name: name.value });
+        const res = await api.createKey({ name: name.value, admin: false });
         await renderManage();
         replace(manage.querySelector("[role=status]")!, h("div", { class: "notice" }, `Key for ${res.key.name} (copy it now, it is not shown again): `,
           h("code", { id: "new-key-secret" }, res.secret)));
