@@ -112,10 +112,12 @@ class EmbeddedWorker(threading.Thread):
     def check(self) -> None:
         """One supervision pass: restart a worker that died, never got ready, or takes no queued job."""
         stall = self.settings.jobs.worker_stall_seconds
-        if self.proc.poll() is not None:
-            self._restart(f"exited with status {self.proc.returncode}")
+        proc = self.proc
+        assert proc is not None, "check() runs after run() spawned the worker"
+        if proc.poll() is not None:
+            self._restart(f"exited with status {proc.returncode}")
             return
-        if not ready_file(self.settings, self.proc.pid).exists():
+        if not ready_file(self.settings, proc.pid).exists():
             if time.monotonic() - self.started_at > max(stall, 120.0):
                 self._restart("did not start consuming")
             return

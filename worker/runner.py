@@ -48,7 +48,7 @@ class ProgressReporter:
 
     def __init__(self, claim: state.Claim, heartbeat: Heartbeat) -> None:
         self.claim, self.heartbeat = claim, heartbeat
-        self._last = (None, -1.0, 0.0)
+        self._last: tuple[str | None, float, float] = (None, -1.0, 0.0)  # stage, progress, monotonic time
 
     def __call__(self, stage: str, progress: float) -> None:
         last_stage, _, last_time = self._last
@@ -72,7 +72,7 @@ def execute(job_id: uuid.UUID, settings: Settings, worker_id: str) -> str:
         claim = state.claim(session, job_id, worker_id, settings.jobs.lease_seconds)
         if claim is None:
             return "skipped"
-        job = session.get(Job, job_id)
+        job = session.get_one(Job, job_id)  # the claim just updated its row
         motion = job.motion_asset
         inputs_spec = (Path(job.mesh_asset.path), job.mesh_asset.format, Path(motion.path) if motion else None,
                        motion.format if motion else None, Path(motion.filename).stem if motion else None,

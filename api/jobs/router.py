@@ -105,7 +105,7 @@ def submit_job(
     if created:
         enqueue_job(job_id)
     with session_scope() as session:
-        return service.to_schema(session.get(Job, job_id), base_url(request))
+        return service.to_schema(session.get_one(Job, job_id), base_url(request))
 
 
 @router.get("", response_model=JobPage, summary="List your jobs, newest first")
@@ -131,7 +131,7 @@ def cancel_job(request: Request, job: OwnedJob) -> JobOut:
     with session_scope() as session:
         if not state.cancel(session, job.id):
             raise Problem(409, "job_finished", f"job is already {job.status}")
-        return service.to_schema(session.get(Job, job.id), base_url(request))
+        return service.to_schema(session.get_one(Job, job.id), base_url(request))
 
 
 @router.get("/{job_id}/artifacts/{name}", summary="Download an artifact", response_class=FileResponse)
@@ -164,11 +164,11 @@ def download_all(job: OwnedJob) -> StreamingResponse:
 @router.post("/{job_id}/rerun", status_code=202, response_model=JobOut, summary="Run a job again on the same inputs and options")
 def rerun_job(request: Request, job: OwnedJob) -> JobOut:
     with session_scope() as session:
-        again = service.rerun_job(session, job=session.get(Job, job.id))
+        again = service.rerun_job(session, job=session.get_one(Job, job.id))
         again_id = again.id
     enqueue_job(again_id)
     with session_scope() as session:
-        return service.to_schema(session.get(Job, again_id), base_url(request))
+        return service.to_schema(session.get_one(Job, again_id), base_url(request))
 
 
 @router.delete("/{job_id}", status_code=204, summary="Delete a finished job and its files")

@@ -12,6 +12,7 @@ from sqlalchemy import delete, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from api.db import rowcount
 from api.jobs.schemas import ArtifactOut, InputFile, JobError, JobOut, JobWarning
 from api.models import Artifact, Asset, Job
 from api.storage import StoredFile
@@ -91,8 +92,8 @@ def delete_job(session: Session, *, job_id: uuid.UUID, finished: tuple[str, ...]
     session.execute(update(Job).where(Job.source_job_id == job_id).values(source_job_id=None)
                     .execution_options(synchronize_session=False))
     session.execute(delete(Artifact).where(Artifact.job_id == job_id).execution_options(synchronize_session=False))
-    gone = session.execute(delete(Job).where(Job.id == job_id, Job.status.in_(finished))
-                           .execution_options(synchronize_session=False)).rowcount == 1
+    gone = rowcount(session.execute(delete(Job).where(Job.id == job_id, Job.status.in_(finished))
+                                    .execution_options(synchronize_session=False))) == 1
     if gone:
         session.commit()
     else:

@@ -13,6 +13,7 @@ from datetime import UTC, datetime, timedelta
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
+from api.db import rowcount
 from api.models import Artifact, Job
 
 TERMINAL = ("succeeded", "failed", "canceled")
@@ -46,7 +47,7 @@ def claim(session: Session, job_id: uuid.UUID, worker_id: str, lease_seconds: fl
         .execution_options(synchronize_session=False)
     )
     session.commit()
-    return Claim(job_id, attempt, worker_id) if result.rowcount == 1 else None
+    return Claim(job_id, attempt, worker_id) if rowcount(result) == 1 else None
 
 
 def _running(claim_: Claim):  # noqa: ANN202
@@ -60,7 +61,7 @@ def heartbeat(session: Session, claim_: Claim, lease_seconds: float) -> str | No
         .execution_options(synchronize_session=False)
     )
     session.commit()
-    if result.rowcount == 1:
+    if rowcount(result) == 1:
         return "running"
     job = session.get(Job, claim_.job_id)
     session.refresh(job) if job is not None else None
@@ -74,7 +75,7 @@ def report_progress(session: Session, claim_: Claim, stage: str, progress: float
         .execution_options(synchronize_session=False)
     )
     session.commit()
-    return result.rowcount == 1
+    return rowcount(result) == 1
 
 
 def succeed(session: Session, claim_: Claim, artifacts: list[dict], warnings: list[dict] | None = None) -> bool:
@@ -85,7 +86,7 @@ def succeed(session: Session, claim_: Claim, artifacts: list[dict], warnings: li
                 warnings=warnings or [])
         .execution_options(synchronize_session=False)
     )
-    if result.rowcount != 1:
+    if rowcount(result) != 1:
         session.rollback()
         return False
     session.add_all(Artifact(job_id=claim_.job_id, **a) for a in artifacts)
@@ -102,7 +103,7 @@ def fail(session: Session, claim_: Claim, code: str, message: str, warnings: lis
         .execution_options(synchronize_session=False)
     )
     session.commit()
-    return result.rowcount == 1
+    return rowcount(result) == 1
 
 
 def cancel(session: Session, job_id: uuid.UUID) -> bool:
@@ -113,7 +114,7 @@ def cancel(session: Session, job_id: uuid.UUID) -> bool:
         .execution_options(synchronize_session=False)
     )
     session.commit()
-    return result.rowcount == 1
+    return rowcount(result) == 1
 
 
 def mark_enqueued(session: Session, job_id: uuid.UUID) -> None:
@@ -128,7 +129,8 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
     not picked up for `requeue_after_seconds` is re-sent (a duplicate delivery is harmless: claim is a CAS).
     """
     t = now()
-    requeue, lost = [], []
+    requeue: list[uuid.UUID] = []
+    lost: list[uuid.UUID] = []
     expired = session.execute(select(Job.id, Job.attempts).where(Job.status == "running", Job.lease_expires_at < t)).all()
     for job_id, attempts in expired:
         done = attempts >= max_attempts
@@ -141,7 +143,7 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
             update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, Job.lease_expires_at < t)
             .values(**values).execution_options(synchronize_session=False)
         )
-        if result.rowcount == 1:
+        if rowcount(result) == 1:
             (lost if done else requeue).append(job_id)
     stale = t - timedelta(seconds=requeue_after_seconds)
     for (job_id,) in session.execute(select(Job.id).where(Job.status == "queued", Job.enqueued_at < stale)).all():
