@@ -56,6 +56,9 @@ export function newJobPage(root: HTMLElement): () => void {
   const refine = h("input", { type: "checkbox", id: "opt-refine", "data-field": "options.refine.enabled" });
   const preset = select("opt-preset", "options.refine.preset", [["flesh", "flesh"], ["muscle", "muscle"], ["fat", "fat"], ["rubber", "rubber"], ["stiff", "stiff"]], "flesh");
   const units = select("opt-units", "options.units", [["auto", "auto"], ["m", "metres"], ["cm", "centimetres"], ["mm", "millimetres"], ["in", "inches"]], "auto");
+  const naming = select("opt-naming", "options.naming", [["", "default"], ["mixamo", "Mixamo"], ["unreal", "Unreal mannequin"],
+    ["unity", "Unity Humanoid"], ["generic", "generic"]], "");
+  const fbx = h("input", { type: "checkbox", id: "opt-fbx", "data-field": "options.fbx" });
   const upAxis = select("opt-up", "options.up_axis", [["", "from file"], ["y", "+Y"], ["z", "+Z"], ["-y", "−Y"], ["-z", "−Z"], ["x", "+X"], ["-x", "−X"]], "");
 
   const bar = h("div", { class: "progress", role: "progressbar", "aria-label": "upload progress", "aria-valuemin": "0", "aria-valuemax": "100", "aria-valuenow": "0" }, h("span", { style: "width:0%" }));
@@ -77,6 +80,9 @@ export function newJobPage(root: HTMLElement): () => void {
       field("In place", inPlace, "remove root horizontal travel"), field("Loop", loop)),
     h("fieldset", {}, h("legend", {}, "Physics refinement (PhysRig MLS-MPM)"),
       field("Enabled", refine, "soft-body secondary motion on top of the animation"), field("Material preset", preset)),
+    h("fieldset", {}, h("legend", {}, "Export"),
+      field("Joint names", naming, "humanoids by engine convention, other creatures descriptive; default: Mixamo names, a kept rig keeps its own"),
+      field("FBX", fbx, "also write rigged.fbx / animated.fbx (when the server has Blender's bpy)")),
     h("div", { style: "grid-column:1 / -1" }, summary,
       h("div", { class: "row" }, submit, cancel, h("div", { style: "flex:1" }, bar), barText)));
 
@@ -118,6 +124,8 @@ export function newJobPage(root: HTMLElement): () => void {
       motion: { clip: clip.value === "" ? null : /^\d+$/.test(clip.value) ? Number(clip.value) : clip.value,
         in_place: inPlace.checked, loop: loop.checked, fps: fps.value === "" ? null : fps.valueAsNumber },
       refine: { enabled: refine.checked, preset: preset.value as NonNullable<JobOptionsInput["refine"]>["preset"] },
+      naming: (naming.value || null) as JobOptionsInput["naming"],
+      fbx: fbx.checked,
     };
     // An emptied number box sends null so the server names the field, rather than silently using a default.
     for (const k of ["max_joints", "smooth_iterations"] as const) if (Number.isNaN(options[k])) (options as Record<string, unknown>)[k] = null;
