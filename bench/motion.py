@@ -55,14 +55,14 @@ def target_rig() -> Skeleton:
         pos[name] = pos[f"{side}Hand"] + np.array([(0.04 + 0.025 * k) * (1 if side == "Left" else -1), 0.0, spread])
     names = list(BODY_JOINTS) + list(HAND_JOINTS)
     parents_by_name = {**BODY_PARENTS, **HAND_PARENTS}
-    parents = [-1 if parents_by_name[n] is None else names.index(parents_by_name[n]) for n in names]
+    parents = [-1 if (parent := parents_by_name[n]) is None else names.index(parent) for n in names]
     kinds = [JointKind.BODY] * len(BODY_JOINTS) + [JointKind.HAND] * len(HAND_JOINTS)
     for k in range(8):
         names.append(f"Tail{k + 1}")
         parents.append(names.index("Hips") if k == 0 else len(names) - 2)
         pos[names[-1]] = np.array([0.0, 0.95 - 0.02 * k, -0.08 - 0.07 * k])
         kinds.append(JointKind.SPRING)
-    return Skeleton(np.array([pos[n] for n in names]), parents, ["mixamorig:" + n for n in names], kinds).validate()
+    return Skeleton(np.array([pos[n] for n in names]), np.array(parents), ["mixamorig:" + n for n in names], kinds).validate()
 
 
 def source_bvh() -> tuple[str, str]:

@@ -22,6 +22,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -64,7 +65,7 @@ def _call_seconds(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, r
     return float(np.median(times))
 
 
-def _blender() -> tuple[Path | None, object]:
+def _blender() -> tuple[Path | None, ModuleType]:
     """The bpy venv's python (None when the peer script has not made it) and the peer module."""
     sys.path.insert(0, str(HERE / "peers"))
     import blender_weights  # noqa: PLC0415

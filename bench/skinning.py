@@ -62,12 +62,15 @@ def creature(target_vertices: int) -> tuple[bytes, Skeleton]:
         mesh.apply_translation((a + b) / 2.0)
         parts.append(mesh)
     soup = trimesh.util.concatenate(parts)
+    assert isinstance(soup, trimesh.Trimesh)  # trimesh types it as any Geometry; capsules concatenate to a Trimesh
     edge = 4.0 * np.sqrt(soup.area / (target_vertices * 2.0 * 0.433))  # triangles ≈ 2 × vertices, equilateral area
     v, f = soup.vertices, soup.faces
     while len(v) < target_vertices:  # subdivision halves edges, so step the size down until there are enough
         v, f = trimesh.remesh.subdivide_to_size(soup.vertices, soup.faces, max_edge=edge)
         edge *= 0.9
-    return trimesh.Trimesh(v, f, process=False).export(file_type="glb"), skeleton
+    glb = trimesh.Trimesh(v, f, process=False).export(file_type="glb")
+    assert isinstance(glb, bytes)  # export() is typed for every format; GLB is bytes
+    return glb, skeleton
 
 
 def main() -> None:

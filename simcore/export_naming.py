@@ -16,9 +16,10 @@ from simcore.skeleton.naming import joint_names, renamed
 
 if TYPE_CHECKING:
     from simcore.pipeline import PipelineState
+    from simcore.skeleton.bone_maps import Preset
 
 
-def effective_preset(state: PipelineState) -> str | None:
+def effective_preset(state: PipelineState) -> Preset | None:
     """The naming preset this job's export uses, or None to keep the skeleton's names."""
     if state.options.naming is not None:
         return state.options.naming

@@ -33,6 +33,7 @@ class ExportInvalid(SimcoreError):
 def _write_glbs(state: PipelineState, progress: StageProgress) -> list[Path]:
     from simcore.io.glb_rig_writer import write_rigged_glb
 
+    assert state.mesh is not None and state.skeleton is not None, "ingest and skeleton run before export"
     mesh, k = state.mesh, int(state.options.max_influences)
     plans: list[tuple[str, dict]] = [("rigged.glb", {})]
     if state.animation is not None:
@@ -56,6 +57,7 @@ def _write_glbs(state: PipelineState, progress: StageProgress) -> list[Path]:
 def _write_usds(state: PipelineState, progress: StageProgress) -> list[Path]:
     from simcore.io.usd_skel_writer import write_usd_skel
 
+    assert state.mesh is not None and state.skeleton is not None, "ingest and skeleton run before export"
     k = int(state.options.max_influences)
     rigged = state.workdir / "rigged.usdc"
     written = write_usd_skel(state.mesh.glb, state.skeleton, state.weights, rigged, max_influences=k,
@@ -111,10 +113,10 @@ def _validate(state: PipelineState, glbs: list[Path], usds: list[Path]) -> None:
         state.warn(f"glTF files not validated: {exc}")
         results.update({p.name: {"skipped": str(exc)} for p in glbs})
     for path in usds:
-        res = validate_usd_file(path)
-        results[path.name] = res.summary()
-        if not res.ok:
-            failures.append(f"{path.name}: {res.errors[:3]}")
+        usd_res = validate_usd_file(path)
+        results[path.name] = usd_res.summary()
+        if not usd_res.ok:
+            failures.append(f"{path.name}: {usd_res.errors[:3]}")
     if failures:
         raise ExportInvalid("exported files failed validation: " + "; ".join(failures))
 

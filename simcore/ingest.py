@@ -14,7 +14,7 @@ from simcore.geometry.mesh_stats import mesh_stats
 from simcore.geometry.parts import bulk_size, surface_parts
 from simcore.geometry.referenced import referenced_mesh
 from simcore.io.gltf_document import GltfDocument
-from simcore.io.gltf_rig import read_rigged_asset
+from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
 from simcore.io.gltf_static import bake_static_glb, static_arrays
 from simcore.io.gltf_zip import glb_from_zip
 from simcore.io.obj_polygons import check_polygon_sizes
@@ -62,6 +62,7 @@ def _load_other(data: bytes, fmt: str) -> tuple[np.ndarray, np.ndarray, list]:
     except Exception as exc:  # noqa: BLE001 - trimesh raises many types for broken files
         message = f"the {fmt.upper()} file could not be read: {type(exc).__name__}: {exc}"[:500]
         raise InvalidInput(message, code="unreadable_mesh", field="mesh") from exc
+    assert isinstance(scene, trimesh.Scene)  # force="scene"; trimesh types load() as returning any Geometry
     geoms = []
     for node in scene.graph.nodes_geometry:
         transform, name = scene.graph[node]
@@ -86,7 +87,7 @@ def _check(vertices: np.ndarray, faces: np.ndarray, max_vertices: int) -> None:
         raise InvalidInput("a face refers to a vertex that does not exist", code="index_out_of_range", field="mesh")
 
 
-def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray) -> object | None:
+def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray) -> RiggedAsset | None:
     """The upload's own skin in our frame (rest pose), weights re-indexed to our vertex order."""
     from scipy.spatial import cKDTree
 

@@ -84,7 +84,9 @@ def calibrate_gate(directory: Path, *, on_asset: Callable[[str], None] = lambda 
             continue
         on_asset(name)
         referenced = np.unique(asset.faces)
-        row = RigRow(name, category, **weight_figures(asset.weights, referenced))
+        figures = weight_figures(asset.weights, referenced)
+        row = RigRow(name, category, unweighted_vertices=int(figures["unweighted_vertices"]),
+                     max_row_sum_error=figures["max_row_sum_error"], non_finite_weights=int(figures["non_finite_weights"]))
         skeleton = used_skeleton(asset.skeleton, used_joints(asset.skeleton, asset.weights))
         row.joints_inside, row.zero_length_bone_share = skeleton_figures(skeleton, asset.vertices, asset.faces).values()
         out.rigs.append(row)

@@ -84,7 +84,7 @@ class SkinEvaluation:
         rows = [r for r in self.rows if r.method == method and r.error is None and (names is None or r.name in names)]
         out: dict = {"assets": len(rows)}
         for key in ROW_KEYS:
-            vals = [r.metrics[key] for r in rows if r.metrics.get(key) is not None]
+            vals = [value for r in rows if (value := r.metrics.get(key)) is not None]
             out[key] = round(float(np.mean(vals)), 6) if vals else None
         return out
 

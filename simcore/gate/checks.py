@@ -44,8 +44,9 @@ class _Judge:
         t = thresholds()[key]
         if not t.past(float(value), t.warn):
             return
-        hard = bool(t.fail is not None and t.past(value, t.fail))
-        limit = t.fail if hard else t.warn
+        fail = t.fail
+        hard = bool(fail is not None and t.past(value, fail))
+        limit = fail if fail is not None and hard else t.warn
         where = f" at frame {frame}" if frame is not None else ""
         entry = add_warning(self.state.report, code=code, stage=self.stage, message=f"{describe(value)}{where}; "
                             f"{'the job fails past' if hard else 'warned past'} {limit:.4g}",
@@ -79,6 +80,7 @@ def _deformation(judge: _Judge, series: DeformationSeries, prefix: str) -> dict[
 
 def _body_faces(state: PipelineState) -> np.ndarray:
     """The mesh's faces but a ground plane's (it is bound rigidly to the root)."""
+    assert state.mesh is not None, "ingest runs before the checks"
     faces = state.mesh.faces
     return faces if state.ground_faces is None else faces[~state.ground_faces]
 
@@ -109,6 +111,7 @@ def check_weights(state: PipelineState, judge: _Judge) -> dict[str, Any] | None:
 def _lbs_blocks(state: PipelineState):  # noqa: ANN202 - an iterator of (t, V, 3) arrays
     from simcore.motion.quality import skin_matrices
 
+    assert state.mesh is not None and state.skeleton is not None and state.animation is not None, "checked by the caller"
     return lbs_blocks(state.mesh.vertices, state.weights, skin_matrices(state.skeleton, state.animation))
 
 
@@ -121,6 +124,7 @@ def check_animation(state: PipelineState, judge: _Judge) -> dict[str, Any] | Non
 def _tear(state: PipelineState) -> tuple[float, int]:
     """Largest refined-vs-LBS displacement over the vertex's limb radius, and its frame."""
     frames = state.refined_frames
+    assert frames is not None and state.mesh is not None and state.skeleton is not None, "checked by the caller"
     radius = bone_radii(state.skeleton, state.mesh.vertices, state.weights)
     worst, frame, start = 0.0, 0, 0
     for lbs in _lbs_blocks(state):

@@ -25,6 +25,7 @@ def soup(skeleton: Skeleton, radii: dict[int, float], count: int = 12) -> tuple[
     parts = [capsule_between(skeleton.positions[p], skeleton.positions[c], radii[int(c)], count)
              for p, c in skeleton.bones()]
     mesh = trimesh.util.concatenate(parts)
+    assert isinstance(mesh, trimesh.Trimesh)  # trimesh types it as any Geometry; capsules concatenate to a Trimesh
     return np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
 
 
@@ -42,7 +43,8 @@ def quadruped(count: int = 12, *, trunk: float = 0.45, girth: float = 0.16) -> t
             named[f"{end}_{side}_knee"] = ((x + 0.05, 0.3, z), top)
             named[f"{end}_{side}_foot"] = ((x, 0.05, z), f"{end}_{side}_knee")
     names = list(named)
-    skeleton = Skeleton(np.array([named[n][0] for n in names]), np.array([names.index(named[n][1]) if named[n][1] else -1 for n in names]), names)
+    parents = [names.index(parent) if (parent := named[n][1]) else -1 for n in names]
+    skeleton = Skeleton(np.array([named[n][0] for n in names]), np.array(parents), names)
     radii = {}
     for c, n in enumerate(names):
         radii[c] = girth if n == "chest" else 0.1 if n in ("neck", "head") else 0.05 if n == "tail" else 0.06
@@ -86,5 +88,6 @@ def stick_humanoid(pose: str = "t", facing: str = "+z", count: int = 12, feet: b
     rot = trimesh.transformations.rotation_matrix(np.deg2rad(turn), [0, 1, 0])[:3, :3]
     parts = [capsule_between(np.array(j[a]) @ rot.T, np.array(j[b]) @ rot.T, r, count) for a, b, r in bones]
     mesh = trimesh.util.concatenate(parts)
+    assert isinstance(mesh, trimesh.Trimesh)  # trimesh types it as any Geometry; capsules concatenate to a Trimesh
     joints = {k: np.array(p) @ rot.T for k, p in j.items()}
     return np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64), joints

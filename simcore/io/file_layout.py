@@ -29,6 +29,7 @@ def file_skeleton(skeleton: Skeleton) -> tuple[Skeleton, np.ndarray]:
         return skeleton, np.arange(skeleton.num_joints)
     order = np.argsort(skeleton.file_order)
     written = skeleton.reordered(order)
+    assert written.file_parents is not None  # reordered() keeps the file layout checked above
     return replace(written, parents=written.file_parents), order
 
 

@@ -21,7 +21,7 @@ from simcore.io.gltf_draco import decompress_draco
 from simcore.io.gltf_images import drop_external_images
 from simcore.io.gltf_schema import node_parents, validate_structure
 
-COMPONENT_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+COMPONENT_DTYPES: dict[int, type[np.generic]] = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 TYPE_WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 MAX_ACCESSOR_ELEMENTS = 50_000_000
 UNREADABLE_EXTENSIONS = {"EXT_meshopt_compression", "KHR_meshopt_compression"}  # no maintained Python decoder
@@ -173,7 +173,7 @@ class GltfDocument:
         """(count, width) array of accessor `index`; normalized integers become float32 in [0,1]/[-1,1]."""
         acc = self._item("accessors", index)
         try:
-            dtype = np.dtype(COMPONENT_DTYPES[acc["componentType"]])
+            dtype: np.dtype = np.dtype(COMPONENT_DTYPES[acc["componentType"]])
             width, count = TYPE_WIDTHS[acc["type"]], int(acc["count"])
         except KeyError as exc:
             raise _fail(f"accessors[{index}] has a bad type: {exc}") from exc

@@ -67,7 +67,7 @@ def drop_external_images(gltf: dict) -> list[str]:
         image_map[i] = None if _is_external(im) else i - sum(_is_external(x) for x in images[:i])
     gltf["images"] = [im for im in images if not _is_external(im)]
     texture_map: dict[int, int | None] = {}
-    kept_textures = []
+    kept_textures: list[dict] = []
     for t, texture in enumerate(gltf.get("textures", [])):
         if _renumber_images(texture, image_map):
             texture_map[t] = len(kept_textures)

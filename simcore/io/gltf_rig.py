@@ -151,7 +151,7 @@ def _chosen_skin(doc: GltfDocument, skinned: list[dict]) -> int:
                 counts[n["skin"]] = counts.get(n["skin"], 0) + doc.items("accessors")[prim["attributes"]["POSITION"]]["count"]
     if not counts:
         raise InvalidInput("skinned meshes carry no JOINTS_0", code="no_skin", field="mesh")
-    return max(counts, key=counts.get)
+    return max(counts, key=counts.__getitem__)
 
 
 def _same_rig(doc: GltfDocument, a: int, b: int) -> bool:
@@ -216,7 +216,9 @@ def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
     skeleton, joints, bind = _skin_skeleton(doc, skin_index)
     j = skeleton.num_joints
     world = doc.world_matrices()
-    verts, faces, weights = [], [], []
+    verts: list[np.ndarray] = []
+    faces: list[np.ndarray] = []
+    weights: list[sp.spmatrix] = []
     for index, node in enumerate(nodes):
         if "mesh" not in node:
             continue

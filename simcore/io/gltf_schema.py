@@ -173,8 +173,8 @@ def node_parents(nodes: list[dict]) -> np.ndarray:
                 raise _fail("the node hierarchy has a cycle")
             p = parent_list[p]
         base = depth[p] if p >= 0 else -1
-        for k, node in enumerate(reversed(path)):
-            depth[node] = base + 1 + k
+        for k, walked in enumerate(reversed(path)):
+            depth[walked] = base + 1 + k
         if path and depth[path[0]] >= MAX_NODE_DEPTH:
             raise LimitExceeded(f"the node hierarchy is more than {MAX_NODE_DEPTH} levels deep",
                                 code="hierarchy_too_deep", field="mesh")

@@ -7,6 +7,8 @@ node's transform, which glTF says to ignore for skinned meshes.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from simcore.errors import InvalidInput
@@ -79,7 +81,7 @@ def bake_static_glb(doc: GltfDocument, conversion: np.ndarray) -> tuple[bytes, n
         if "mesh" not in node:
             continue
         src_mesh = doc.items("meshes")[int(node["mesh"])]
-        primitives = []
+        primitives: list[dict[str, Any]] = []
         for prim in src_mesh.get("primitives", []):
             attrs = prim.get("attributes", {})
             if "POSITION" not in attrs or prim.get("mode", MODES_TRIANGLES) not in TRIANGLE_MODES:  # strips and fans become lists

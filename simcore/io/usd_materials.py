@@ -139,7 +139,7 @@ def _define_material(stage, doc: GltfDocument, gltf_material: dict, path: str, f
         surface.CreateInput("roughness", types.Float).Set(rough)
     normal_slot = gltf_material.get("normalTexture")
     normal_image = _texture_image(doc, normal_slot, files)
-    if normal_image is not None:
+    if normal_image is not None and normal_slot is not None:  # an image comes from a slot
         k = float(normal_slot.get("scale", 1.0))
         tex = net.texture("NormalTexture", normal_image, "raw", scale=(2 * k, 2 * k, 2.0, 1.0), bias=(-k, -k, -1.0, 0.0))
         net.connect("normal", types.Normal3f, tex, "rgb")

@@ -79,7 +79,8 @@ def _define_meshes(stage, layout: MeshLayout, infl: Influences | None, skel_path
     """One UsdGeom.Mesh per triangle primitive, bound to its material; returns [(mesh, vertex slice)]."""
     from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
 
-    doc, taken, out = layout.doc, set(), []
+    doc, out = layout.doc, []
+    taken: set[str] = set()
     UsdGeom.Scope.Define(stage, f"{ROOT}/Geometry")
     for s in layout.slices:
         prim = doc.items("meshes")[s.mesh]["primitives"][s.primitive]

@@ -25,7 +25,7 @@ SEED = 0
 
 
 def _dense(weights: sp.spmatrix | np.ndarray) -> np.ndarray:
-    return weights.toarray() if sp.issparse(weights) else np.asarray(weights, dtype=np.float64)
+    return np.asarray(weights, dtype=np.float64) if isinstance(weights, np.ndarray) else weights.toarray()
 
 
 def _row_normalised(weights: sp.spmatrix | np.ndarray) -> np.ndarray:

@@ -93,13 +93,14 @@ def _ordered(asset: RiggedAsset) -> tuple[Skeleton, np.ndarray, np.ndarray]:
     skel = asset.skeleton
     if np.all(skel.parents < np.arange(skel.num_joints)):
         return skel, asset.joint_nodes, asset.bind_matrices
-    order, placed = [], np.zeros(skel.num_joints, bool)
-    while len(order) < skel.num_joints:
+    placed_order: list[int] = []
+    placed = np.zeros(skel.num_joints, bool)
+    while len(placed_order) < skel.num_joints:
         for j, p in enumerate(skel.parents):
             if not placed[j] and (p < 0 or placed[p]):
-                order.append(j)
+                placed_order.append(j)
                 placed[j] = True
-    order = np.asarray(order)
+    order = np.asarray(placed_order)
     return skel.reordered(order), asset.joint_nodes[order], asset.bind_matrices[order]
 
 

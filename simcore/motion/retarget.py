@@ -146,8 +146,9 @@ def _rest_alignment(source: Skeleton, s_rest: np.ndarray, target: Skeleton, mapp
         u_arr, v_arr = np.asarray(u, dtype=np.float64).reshape(-1, 3), np.asarray(v, dtype=np.float64).reshape(-1, 3)
         keep = (np.linalg.norm(u_arr, axis=1) > 1e-9) & (np.linalg.norm(v_arr, axis=1) > 1e-9)
         if keep.any():
-            out[j] = rotation_between(u_arr[keep], v_arr[keep])
-            if keep.sum() > 1 and _misfit(out[j], u_arr[keep], v_arr[keep]) > BRANCH_MISFIT:
+            rotation = rotation_between(u_arr[keep], v_arr[keep])
+            out[j] = rotation
+            if keep.sum() > 1 and _misfit(rotation, u_arr[keep], v_arr[keep]) > BRANCH_MISFIT:
                 out[j] = None  # the bones fan out differently: joints placed differently, not posed differently
     return out
 
@@ -241,7 +242,8 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     inherited: list[np.ndarray] = [np.eye(3)] * j_count  # alignment in force at each joint
     for j in range(j_count):
         p = int(parents[j])
-        a = align[j] if align[j] is not None else (inherited[p] if p >= 0 else np.eye(3))
+        own = align[j]
+        a = own if own is not None else (inherited[p] if p >= 0 else np.eye(3))
         inherited[j] = a
         if j in mapping:
             delta_t[:, j] = delta_s[:, mapping[j]] @ a

@@ -57,7 +57,7 @@ def load_uploaded_clip(path: Path, fmt: str | None, state: PipelineState) -> Mot
                             code="unsupported_format", field="motion")
 
 
-def clip_from_mesh_upload(state: PipelineState) -> MotionClip | None:
+def clip_from_mesh_upload(state: PipelineState) -> MotionClip:
     """The clip `options.motion.clip` names inside the mesh upload, moved into the ingested mesh's frame."""
     from simcore.motion.clip_frame import similarity_fit, transform_clip
     from simcore.motion.gltf_clips import read_gltf_clip
@@ -99,6 +99,7 @@ def motion_report(state: PipelineState, clip: MotionClip, result: Any) -> dict[s
         "facing_quarter_turns": result.facing_turns,
         "contact_joints": result.contact_joints,
     }
+    assert state.skeleton is not None, "run() returns before retargeting without one"
     if state.weights is not None and state.mesh is not None:
         mats = skin_matrices(state.skeleton, anim)
         used = referenced_mesh(state.mesh.vertices, state.mesh.faces).ids  # stray vertices would move the ground
@@ -116,8 +117,8 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     if state.options.stages is not None and "motion" not in state.options.stages:
         state.report["motion"] = {"status": "skipped", "reason": "not among the requested stages"}
         return
-    has_file = state.inputs.motion_path is not None
-    if not has_file and opts.clip is None:
+    motion_path = state.inputs.motion_path
+    if motion_path is None and opts.clip is None:
         state.report["motion"] = {"status": "none", "reason": "no motion uploaded and no options.motion.clip"}
         return
     if state.skeleton is None:
@@ -125,8 +126,8 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         state.warn("motion was given but no skeleton was built, so it was not applied")
         return
     progress(0.05)
-    if has_file:
-        clip = load_uploaded_clip(Path(state.inputs.motion_path), state.inputs.motion_format, state)
+    if motion_path is not None:
+        clip = load_uploaded_clip(Path(motion_path), state.inputs.motion_format, state)
     else:
         clip = clip_from_mesh_upload(state)
     progress(0.3)

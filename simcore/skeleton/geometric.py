@@ -133,6 +133,7 @@ def _connect_bodies(graph: _JointGraph, order: list[int]) -> int:
             i, j = np.unravel_index(int(np.argmin(d)), d.shape)
             if best is None or d[i, j] < best[0]:
                 best = (float(d[i, j]), b, int(outside[j]), int(inside[i]))
+        assert best is not None  # pending is not empty
         _, b, a, c = best
         graph.edges.append((a, c))
         connected |= body == b

@@ -172,13 +172,13 @@ def _detect(tree: _Tree, up: np.ndarray, vertices: np.ndarray) -> _Biped | None:
                 pair = (span, (a, b), (pa, pb), (la, lb))
     if pair is None:
         return None
-    span, hands, attach, arm_len = pair
+    span, hands, shoulders, arm_len = pair
     leg_len = (path_length(tree.pos, depth_path[foot_a][: depth_path[foot_a].index(pelvis) + 1]),
                path_length(tree.pos, depth_path[foot_b][: depth_path[foot_b].index(pelvis) + 1]))
     checks = {
         "head_on_top": _soft(rel[head], 0.9, 1.01, 0.1),
         "crotch_height": _soft(rel[pelvis], 0.25, 0.62, 0.1),
-        "arms_above_crotch": _soft(min(rel[attach[0]], rel[attach[1]]) - rel[pelvis], 0.15, 1.0, 0.1),
+        "arms_above_crotch": _soft(min(rel[shoulders[0]], rel[shoulders[1]]) - rel[pelvis], 0.15, 1.0, 0.1),
         "arm_symmetry": _soft(min(arm_len) / max(arm_len), 0.7, 1.0, 0.2),
         "leg_symmetry": _soft(min(leg_len) / max(leg_len), 0.75, 1.0, 0.2),
         "hand_span": _soft(span / height, 0.3, 2.0, 0.15),
@@ -186,7 +186,7 @@ def _detect(tree: _Tree, up: np.ndarray, vertices: np.ndarray) -> _Biped | None:
         "two_feet_only": 1.0 if extra_low == 0 else 0.3,
     }
     confidence = float(np.prod(list(checks.values())))
-    return _Biped(up, confidence, checks, floor, height, parent, head, (foot_a, foot_b), pelvis, hands, attach)
+    return _Biped(up, confidence, checks, floor, height, parent, head, (foot_a, foot_b), pelvis, hands, shoulders)
 
 
 def _polyline(tree: _Tree, path: list[int]) -> np.ndarray:

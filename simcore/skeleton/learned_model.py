@@ -137,6 +137,8 @@ class ShapeEncoder(nn.Module):
 class SkeletonTokenModel(nn.Module):
     """Shape encoder + causal decoder; `forward` gives next-token logits (B, L, 267) for teacher forcing."""
 
+    bin_values: torch.Tensor  # (NUM_BINS,) coordinate of each bin, a buffer
+
     def __init__(self, config: SkeletonModelConfig) -> None:
         super().__init__()
         self.config = config

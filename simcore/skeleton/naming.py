@@ -124,9 +124,9 @@ def joint_names(skeleton: Skeleton, preset: Preset) -> Naming:
         for j, name in zip(members, chain_names(chain, len(members), preset)):
             names[j] = name
     for j, slot in enumerate(slots):
-        name = slot_name(slot, preset) if slot and slot not in ("spine", "neck") else None
-        if name:
-            names[j] = name
+        slot_label = slot_name(slot, preset) if slot and slot not in ("spine", "neck") else None
+        if slot_label:
+            names[j] = slot_label
     return Naming(unique_names(names), how)
 
 

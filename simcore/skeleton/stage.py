@@ -28,6 +28,8 @@ from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import Skeleton
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from simcore.pipeline import PipelineState, StageProgress
 
 
@@ -50,14 +52,14 @@ def _tokens(skeleton: Skeleton, vertices: np.ndarray) -> tuple[dict[str, Any] | 
     }, None
 
 
-def _given_skeleton(state: PipelineState) -> Skeleton:
-    """The uploaded (edited) skeleton file; it goes with `skeleton: keep`."""
+def _given_skeleton(state: PipelineState, path: Path, vertices: np.ndarray) -> Skeleton:
+    """The uploaded (edited) skeleton file at `path`; it goes with `skeleton: keep`. vertices: (V, 3) the ingested mesh's."""
     from simcore.skeleton.skeleton_file import read_skeleton_file
 
     if state.options.skeleton != "keep":
         raise InvalidInput("a skeleton file is used as it is: set options.skeleton to 'keep'", code="invalid_option",
                            field="options.skeleton")
-    return read_skeleton_file(state.inputs.skeleton_path.read_bytes(), state.mesh.vertices)
+    return read_skeleton_file(path.read_bytes(), vertices)
 
 
 def run(state: PipelineState, progress: StageProgress) -> None:
@@ -73,7 +75,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     ground = ground_faces(parts, len(mesh.faces))
     report: dict[str, Any]
     if state.inputs.skeleton_path is not None:
-        skeleton, method, report = _given_skeleton(state), "given", {}
+        skeleton, method, report = _given_skeleton(state, state.inputs.skeleton_path, mesh.vertices), "given", {}
     elif options.skeleton == "keep":
         if mesh.source_rig is None:
             raise InvalidInput("options.skeleton is 'keep' but the uploaded mesh has no skin to keep",

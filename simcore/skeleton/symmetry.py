@@ -119,8 +119,8 @@ def lopsided_branches(skeleton: Skeleton, twins: MirrorTwins, grid: VoxelGrid) -
     for j in range(skeleton.num_joints - 1, -1, -1):  # parents come before children: children are settled first
         twinless[j] = twinless[j] and all(twinless[c] for c in children[j])
     drop = np.zeros(skeleton.num_joints, bool)
-    for j in np.flatnonzero(twinless[1:] & ~twinless[parents[1:]]) + 1:
-        branch = [int(j)]
+    for top in np.flatnonzero(twinless[1:] & ~twinless[parents[1:]]) + 1:
+        branch = [int(top)]
         for k in branch:  # grows while it is read: the whole subtree
             branch += children[k]
         mirrored = twins.plane.reflect(pos[branch])

@@ -257,7 +257,8 @@ class SkeletonTokenizer:
                 template = BODY_JOINTS if section == JointKind.BODY else HAND_JOINTS
                 tparents = BODY_PARENTS if section == JointKind.BODY else HAND_PARENTS
                 name = template[template_slot]
-                parent = -1 if tparents[name] is None else names.index(full_name(tparents[name]))
+                template_parent = tparents[name]
+                parent = -1 if template_parent is None else names.index(full_name(template_parent))
                 names.append(full_name(name))
                 kinds.append(section)
                 template_slot += 1

@@ -105,7 +105,7 @@ class Skeleton:
             raise InvalidInput("skeleton joint names are not unique", field="skeleton")
         if (self.file_order is None) != (self.file_parents is None):
             raise InvalidInput("skeleton file_order and file_parents come together", field="skeleton")
-        if self.file_order is not None:
+        if self.file_order is not None and self.file_parents is not None:  # both or neither, checked above
             if sorted(self.file_order.tolist()) != list(range(j)) or self.file_parents.shape != (j,):
                 raise InvalidInput("skeleton file_order is not a permutation of its joints", field="skeleton")
             parents_first_order(self.file_parents)  # in range and acyclic

@@ -58,12 +58,12 @@ def _bone_sources(
     inside = grid.in_bounds(vox)
     vid[inside] = ids[tuple(vox[inside].T)]
     hit = vid >= 0
-    keys = [owner[hit] * n + vid[hit]]
+    key_parts = [owner[hit] * n + vid[hit]]
     lost = np.setdiff1d(np.arange(joints), owner[hit])
     if len(lost):  # bones outside the solid (thin part, or a joint placed off the mesh): their nearest voxels
         mine = np.isin(owner, lost)
-        keys.append(owner[mine] * n + cKDTree(grid.centers(ijk)).query(points[mine], k=1)[1])
-    keys = unique_ints(np.concatenate(keys))
+        key_parts.append(owner[mine] * n + cKDTree(grid.centers(ijk)).query(points[mine], k=1)[1])
+    keys = unique_ints(np.concatenate(key_parts))
     sj, sv = keys // n, keys % n
     # Each source's distance to the nearest segment of its joint (segments come grouped by joint).
     first = np.searchsorted(seg.owner, np.arange(joints))

@@ -36,7 +36,7 @@ def _visible(grid: VoxelGrid, start: np.ndarray, end: np.ndarray) -> np.ndarray:
     """
     t = np.linspace(0.0, 0.85, LINE_SAMPLES)
     pts = start[:, None, :] + t[None, :, None] * (end - start)[:, None, :]
-    return grid.inside(pts.reshape(-1, 3)).reshape(len(start), LINE_SAMPLES).all(axis=1)
+    return np.all(grid.inside(pts.reshape(-1, 3)).reshape(len(start), LINE_SAMPLES), axis=1)
 
 
 def heat_weights(

@@ -129,7 +129,7 @@ def compute_weights(
         step(1.0)
         return weights, scores
 
-    chosen = [method] if method != "auto" else (["learned"] if use_learned else list(HAND_WRITTEN))
+    chosen: list[str] = [method] if method != "auto" else (["learned"] if use_learned else list(HAND_WRITTEN))
     results: dict[str, sp.csr_matrix] = {}
     scores: dict[str, dict[str, float]] = {}
     tracker = _MethodProgress(chosen)

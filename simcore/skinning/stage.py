@@ -73,6 +73,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
 
 def _excluded(state: PipelineState) -> np.ndarray:
     """(J,) bool: the joints options.exclude_joints names (glob, case-insensitive); warns of patterns that match none."""
+    assert state.skeleton is not None, "run() checked it"
     names = [n.lower() for n in state.skeleton.names]
     drop = np.zeros(len(names), bool)
     for pattern in state.options.exclude_joints:

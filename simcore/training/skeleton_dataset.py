@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -102,7 +103,7 @@ def make_skeleton_sample(character: Character, rng: np.random.Generator, points:
 def _save(path: Path, sample: SkeletonSample) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **sample.arrays())
+    np.savez(tmp, **sample.arrays())  # type: ignore[arg-type]  # numpy's stub: ** could fill allow_pickle (bool)
     tmp.replace(path)
 
 
@@ -137,16 +138,19 @@ def build_skeleton_data(config: SkeletonDataConfig, out: Path, report: Callable[
     def augmented(c: Character, rng: np.random.Generator, count: int) -> list[Character]:
         return [upright_turned(v, rng, config.turn_degrees) for v in variants(c, rng, count, config.pose_degrees, turn=False)]
 
+    def at_rest(c: Character) -> list[Character]:
+        return [normalised(c)]
+
     for i, c in enumerate(train):
         rng = np.random.default_rng([config.seed, 0, i])
-        emit("train", c.name, lambda c=c, rng=rng: augmented(c, rng, config.variants), rng)
+        emit("train", c.name, partial(augmented, c, rng, config.variants), rng)
     for i, c in enumerate(val):
         rng = np.random.default_rng([config.seed, 1, i])
-        emit("val", c.name, lambda c=c: [normalised(c)], rng)
+        emit("val", c.name, partial(at_rest, c), rng)
     bodies = anny_bodies(config.anny_bodies, np.random.default_rng([config.seed, 2])) if config.anny_bodies else iter(())
     for i, c in enumerate(bodies):
         rng = np.random.default_rng([config.seed, 3, i])
-        emit("train", c.name, lambda c=c, rng=rng: augmented(c, rng, config.anny_variants), rng)
+        emit("train", c.name, partial(augmented, c, rng, config.anny_variants), rng)
     summary = {**counts, "skipped": skipped}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return summary

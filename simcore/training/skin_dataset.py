@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -54,7 +55,7 @@ def corpus_characters(root: Path, split: str, skipped: dict[str, str]) -> Iterat
 def _write(path: Path, sample: SkinSample) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **sample.arrays())
+    np.savez(tmp, **sample.arrays())  # type: ignore[arg-type]  # numpy's stub: ** could fill allow_pickle (bool)
     tmp.replace(path)
 
 
@@ -86,18 +87,22 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
         done += 1
         report(name, done, total)
 
+    def posed_samples(c: Character, rng: np.random.Generator, count: int) -> list[SkinSample]:
+        return [make_sample(v, rng, config.vertices) for v in variants(c, rng, count, config.pose_degrees)]
+
+    def rest_sample(c: Character, rng: np.random.Generator) -> list[SkinSample]:
+        return [make_sample(normalised(c), rng, config.val_vertices)]
+
     for i, c in enumerate(train):
         rng = np.random.default_rng([config.seed, 0, i])
-        emit("train", c.name, lambda c=c, rng=rng: [make_sample(v, rng, config.vertices)
-                                                      for v in variants(c, rng, config.variants, config.pose_degrees)])
+        emit("train", c.name, partial(posed_samples, c, rng, config.variants))
     for i, c in enumerate(val):
         rng = np.random.default_rng([config.seed, 1, i])
-        emit("val", c.name, lambda c=c, rng=rng: [make_sample(normalised(c), rng, config.val_vertices)])
+        emit("val", c.name, partial(rest_sample, c, rng))
     bodies = anny_bodies(config.anny_bodies, np.random.default_rng([config.seed, 2])) if config.anny_bodies else iter(())
     for i, c in enumerate(bodies):
         rng = np.random.default_rng([config.seed, 3, i])
-        emit("train", c.name, lambda c=c, rng=rng: [make_sample(v, rng, config.vertices)
-                                                      for v in variants(c, rng, config.anny_variants, config.pose_degrees)])
+        emit("train", c.name, partial(posed_samples, c, rng, config.anny_variants))
     summary = {**counts, "skipped": skipped}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return summary
