@@ -58,3 +58,23 @@ def test_the_source_job_must_be_yours(client, auth, other_auth, dev_assets):
     theirs = _post(client, other_auth, fox, '{"stages": []}').json()["id"]
     r = _post(client, auth, fox, '{"stages": []}', source_job=theirs)
     assert r.status_code == 404 and r.json()["code"] == "job_not_found", r.text
+
+
+def test_a_kept_rigs_bind_frames_survive_the_edit(client, auth, dev_assets):
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    fox = (dev_assets / "fox.glb").read_bytes()
+    kept = _post(client, auth, fox, json.dumps({"skeleton": "keep", "stages": ["skeleton"]})).json()
+    kept = client.get(f"/api/v1/jobs/{kept['id']}", headers=auth).json()
+    doc = json.loads(_artifact(client, auth, kept, "skeleton.json"))
+    edited = {k: doc[k] for k in ("names", "parents", "positions", "orientations")}  # what the dashboard sends
+    edited["positions"][5][2] += 0.01
+    job = _post(client, auth, fox, KEEP, skeleton=json.dumps(edited).encode(), source_job=kept["id"]).json()
+    job = client.get(f"/api/v1/jobs/{job['id']}", headers=auth).json()
+    assert job["status"] == "succeeded", job
+    rig = read_rigged_asset(GltfDocument.from_bytes(_artifact(client, auth, job, "rigged.glb")))
+    frames = Rotation.from_matrix(rig.bind_matrices[:, :3, :3]).as_quat()
+    order = [edited["names"].index(n) for n in rig.skeleton.names]
+    dots = np.abs(np.sum(frames * np.asarray(edited["orientations"])[order], axis=1))
+    assert dots.min() > 1 - 1e-5  # every joint keeps its studio bind frame
