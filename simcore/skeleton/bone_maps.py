@@ -13,7 +13,7 @@ from typing import Literal
 from simcore.skeleton.mixamo import FINGERS, full_name
 
 Preset = Literal["mixamo", "unreal", "unity", "generic"]
-PRESETS: tuple[str, ...] = ("mixamo", "unreal", "unity", "generic")
+PRESETS: tuple[Preset, ...] = ("mixamo", "unreal", "unity", "generic")
 
 # Side-less limb slot → (unreal, unity, generic) stem; unreal appends _l/_r, unity prefixes Left/Right,
 # generic appends _L/_R.

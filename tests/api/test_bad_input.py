@@ -27,7 +27,7 @@ def glb(doc: dict, binary: bytes = b"", declared_total: int | None = None) -> by
 
 def triangle_gltf(positions: np.ndarray, buffer_length: int | None = None, uri: str | None = None) -> dict:
     data = positions.astype(np.float32).tobytes()
-    buffer = {"byteLength": buffer_length or len(data)}
+    buffer: dict[str, int | str] = {"byteLength": buffer_length or len(data)}
     if uri:
         buffer["uri"] = uri
     return {"asset": {"version": "2.0"}, "buffers": [buffer],

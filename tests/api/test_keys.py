@@ -72,8 +72,10 @@ def test_the_local_key_of_a_fresh_install_is_an_admin(client):
         for key in list_keys(session):
             session.delete(key)
     secret = ensure_local_key()
+    assert secret is not None  # None only while other keys exist, and they were deleted above
     with session_scope() as session:
-        assert find_active(session, secret=secret).is_admin
+        local = find_active(session, secret=secret)
+        assert local is not None and local.is_admin
 
 
 def test_cli_creates_an_admin_key(client):

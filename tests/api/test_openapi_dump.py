@@ -27,6 +27,7 @@ def test_dump_has_the_endpoints_the_page_calls_and_a_resolvable_job_options_sche
     monkeypatch.chdir(tmp_path)  # the dump must not create .rigforge/ where it runs
     before = (os.environ.get("RIGFORGE_DATA_DIR"), tempfile.tempdir)
     spec_loader = importlib.util.spec_from_file_location("dump_openapi", DUMP)
+    assert spec_loader is not None and spec_loader.loader is not None
     module = importlib.util.module_from_spec(spec_loader)
     spec_loader.loader.exec_module(module)
     spec = json.loads(json.dumps(module.openapi_document()))

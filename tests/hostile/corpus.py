@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from tests.hostile.case import Case
 from tests.hostile.gltf_cases import gltf_cases
@@ -28,7 +29,7 @@ def write(out: Path) -> int:
     out.mkdir(parents=True, exist_ok=True)
     index = []
     for c in all_cases():
-        entry = {"name": c.name, "kind": c.kind, "expect": sorted(c.expect)}
+        entry: dict[str, Any] = {"name": c.name, "kind": c.kind, "expect": sorted(c.expect)}
         if c.kind == "request":
             entry["request"] = {k: v for k, v in c.request.items() if k in ("form", "headers")}
         else:

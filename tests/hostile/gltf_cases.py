@@ -155,7 +155,7 @@ def _mutations(doc: dict, binary: bytes) -> Iterator[Case]:
         yield case(f"gltf-missing-{_label(path)}", "mesh", glb(_drop(doc, path), binary), *BAD_GLTF)
 
 
-def _chain(depth: int) -> dict:
+def _chain(depth: int) -> bytes:
     """A triangle under a `depth`-deep chain of nodes (the 20,000-deep chain took 190 s to check when quadratic)."""
     doc, binary = rigged_base()
     nodes = [{"children": [i + 1]} for i in range(depth - 1)] + [{"mesh": 0}]

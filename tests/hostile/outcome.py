@@ -11,6 +11,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
+from typing import TYPE_CHECKING, cast
 
 from api.errors import Problem, status_for
 from api.jobs.router import parse_options
@@ -18,6 +19,9 @@ from api.jobs.uploads import check_structure, upload_format
 from simcore.errors import SimcoreError
 from simcore.options import JobOptions
 from tests.hostile.case import OK, Case
+
+if TYPE_CHECKING:
+    from simcore.pipeline import PipelineState
 
 
 @dataclass(frozen=True)
@@ -30,7 +34,7 @@ class Outcome:
     field: str | None = None
 
 
-def _rejected(exc: Exception) -> Outcome:
+def _rejected(exc: Problem | SimcoreError) -> Outcome:
     if isinstance(exc, Problem):
         return Outcome("rejected", exc.code, exc.status, exc.field)
     return Outcome("rejected", exc.code, status_for(exc), exc.field)
@@ -44,8 +48,8 @@ def _read_as_worker(path: Path, fmt: str, kind: str) -> None:
         return
     from simcore.motion.stage import load_uploaded_clip
 
-    state = SimpleNamespace(options=JobOptions(), inputs=SimpleNamespace(motion_name="clip"))
-    load_uploaded_clip(path, fmt, state)
+    state = SimpleNamespace(options=JobOptions(), inputs=SimpleNamespace(motion_name="clip"))  # what the reader uses
+    load_uploaded_clip(path, fmt, cast("PipelineState", state))
 
 
 def file_outcome(case: Case, workdir: Path) -> Outcome:

@@ -32,6 +32,7 @@ def test_each_input_ends_with_its_expected_outcome(case: Case, tmp_path, monkeyp
     result = outcome(case)
     assert result.code in case.expect, result
     if result.kind == "rejected":
+        assert result.status is not None, result
         assert 400 <= result.status < 500 and result.field == case.kind.split("-")[0] or case.kind == "options", result
 
 
@@ -42,8 +43,8 @@ def _send(client, auth: dict, case: Case):
         headers = {k: v for k, v in headers.items() if v}
         if spec.get("content") is not None:
             return client.post("/api/v1/jobs", headers=headers, content=spec["content"])
-        files = [(field, (name, data)) for field, name, data in spec["files"]]
-        return client.post("/api/v1/jobs", headers=headers, files=files or None, data=spec["form"] or None)
+        parts = [(field, (name, data)) for field, name, data in spec["files"]]
+        return client.post("/api/v1/jobs", headers=headers, files=parts or None, data=spec["form"] or None)
     files = {"mesh": ("upload", case.data)} if case.kind == "mesh" else {"mesh": ("t.obj", MOTION_HOST), "motion": ("clip", case.data)}
     return client.post("/api/v1/jobs", headers=auth, files=files, data={"options": INGEST_ONLY if case.kind == "mesh" else "{}"})
 

@@ -51,12 +51,13 @@ def _ply(v: int | str, f: int | str, body: str) -> str:
 def ply_cases() -> Iterator[Case]:
     verts = "0 0 0\n1 0 0\n0 1 0\n"
     yield case("ply-valid", "mesh", _ply(3, 1, verts + "3 0 1 2\n"), OK)
-    for k, (v, f, body) in enumerate([
+    malformed: list[tuple[int | str, int, str]] = [
         (30, 1, verts + "3 0 1 2\n"), (3, 10, verts + "3 0 1 2\n"), (-1, 1, verts), (3, -5, verts),
         (10**12, 1, verts), (3, 10**12, verts), ("x", 1, verts), (3, 1, verts + "3 0 1 9\n"), (3, 1, verts + "3 0 1\n"),
         (3, 1, verts + "255 0 1 2\n"), (3, 1, "nan nan nan\n1 0 0\n0 1 0\n3 0 1 2\n"), (3, 1, "a b c\n1 0 0\n0 1 0\n3 0 1 2\n"),
         (3, 1, verts + "3 -1 0 1\n"), (3, 1, verts + "3 0 1 99999999999\n"), (3, 0, verts), (0, 0, ""),
-    ]):
+    ]
+    for k, (v, f, body) in enumerate(malformed):
         yield case(f"ply-ascii-{k}", "mesh", _ply(v, f, body), OK, *UNREADABLE, "too_many_vertices")
     header = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n" \
              "element face 1\nproperty list uchar int vertex_indices\nend_header\n"

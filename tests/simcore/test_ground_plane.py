@@ -14,6 +14,7 @@ from simcore.geometry.ground import ground_faces as ground_of_parts
 from simcore.geometry.parts import surface_parts
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
+from tests.meshes import glb_bytes, joined
 
 
 def _plane(y: float, half: float, centre: tuple[float, float] = (0.0, 0.0), tilt_deg: float = 0.0) -> trimesh.Trimesh:
@@ -30,8 +31,8 @@ def ground_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def _join(*meshes: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
-    joined = trimesh.util.concatenate(list(meshes))
-    return np.asarray(joined.vertices), np.asarray(joined.faces)
+    mesh = joined(list(meshes))
+    return np.asarray(mesh.vertices), np.asarray(mesh.faces)
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +77,7 @@ def test_a_lone_plane_or_a_plain_model_has_no_ground(figure: trimesh.Trimesh) ->
 def test_a_character_on_a_floor_is_still_rigged_as_a_humanoid(figure: trimesh.Trimesh, tmp_path: Path) -> None:
     floor = _plane(0.0, 2.0)
     upload = tmp_path / "on_floor.glb"
-    upload.write_bytes(trimesh.util.concatenate([figure, floor]).export(file_type="glb"))
+    upload.write_bytes(glb_bytes(joined([figure, floor])))
     state = run_pipeline(PipelineInputs(upload, "glb"), JobOptions(), tmp_path / "out")  # both exports validate
     assert state.skeleton is not None and state.weights is not None and state.mesh is not None
     assert state.report["skeleton"]["method"] == "humanoid"  # the floor made it a 2-body geometric skeleton before

@@ -11,6 +11,7 @@ from simcore.ingest import ingest
 from simcore.mpm.sampling import sample_volume
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skinning.predict import compute_weights
+from tests.meshes import glb_bytes, joined
 
 FAR = np.array([[1000.0, 1000.0, 1000.0]])
 
@@ -18,7 +19,7 @@ FAR = np.array([[1000.0, 1000.0, 1000.0]])
 def test_ingest_sizes_and_guesses_units_from_the_referenced_vertices() -> None:
     box = trimesh.creation.box([1.0, 2.0, 1.0])
     stray = trimesh.Trimesh(np.vstack([box.vertices, FAR]), box.faces, process=False)
-    mesh = ingest(stray.export(file_type="glb"), "glb")
+    mesh = ingest(glb_bytes(stray), "glb")
     assert len(mesh.vertices) == 9  # the stray vertex keeps its slot: exports match the upload's vertex order
     assert mesh.stats["units_applied"] == "m" and mesh.stats["warnings"] == []  # it read as cm before
     assert mesh.stats["unreferenced_vertices"] == 1
@@ -53,10 +54,10 @@ def test_a_small_part_far_away_does_not_set_the_units() -> None:
     figure = trimesh.creation.capsule(height=1.2, radius=0.25)
     prop = trimesh.creation.box([0.05, 0.05, 1.0])
     prop.apply_translation([30.0, 0.0, 0.0])
-    mesh = ingest(trimesh.util.concatenate([figure, prop]).export(file_type="glb"), "glb")
+    mesh = ingest(glb_bytes(joined([figure, prop])), "glb")
     assert mesh.stats["units_applied"] == "m" and mesh.stats["warnings"] == []
     # The same in centimetres (prop 3000 cm away) is still centimetres, not millimetres.
     figure.apply_scale(100.0)
     prop.apply_scale(100.0)
-    mesh = ingest(trimesh.util.concatenate([figure, prop]).export(file_type="glb"), "glb")
+    mesh = ingest(glb_bytes(joined([figure, prop])), "glb")
     assert mesh.stats["units_applied"] == "cm"

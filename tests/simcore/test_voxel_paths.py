@@ -28,15 +28,21 @@ def _reference(occ: np.ndarray, sources: list[tuple[int, int, float]], count: in
     """(n, count) distances by scipy: an explicit graph with one super-source node per search."""
     ijk = np.argwhere(occ)
     index = {tuple(p): i for i, p in enumerate(ijk)}
-    rows, cols, lengths = [], [], []
+    rows: list[int] = []
+    cols: list[int] = []
+    lengths: list[float] = []
     for i, p in enumerate(ijk):
         for o in itertools.product((-1, 0, 1), repeat=3):
             q = index.get(tuple(p + o))
             if o != (0, 0, 0) and q is not None:
-                rows.append(i), cols.append(q), lengths.append(np.linalg.norm(o) * PITCH)
+                rows.append(i)
+                cols.append(q)
+                lengths.append(float(np.linalg.norm(o)) * PITCH)
     n = len(ijk)
     for group, voxel, length in sources:
-        rows.append(n + group), cols.append(voxel), lengths.append(length + 1e-12)
+        rows.append(n + group)
+        cols.append(voxel)
+        lengths.append(length + 1e-12)
     graph = sp.csr_matrix((lengths, (rows, cols)), shape=(n + count, n + count))
     return dijkstra(graph, directed=True, indices=np.arange(n, n + count))[:, :n].T
 

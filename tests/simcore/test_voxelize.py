@@ -6,6 +6,7 @@ import numpy as np
 import trimesh
 
 from simcore.geometry.voxelize import solid_voxels, surface_samples
+from tests.meshes import joined
 
 
 def _mixed_mesh() -> tuple[np.ndarray, np.ndarray]:
@@ -14,7 +15,7 @@ def _mixed_mesh() -> tuple[np.ndarray, np.ndarray]:
     sphere = trimesh.creation.icosphere(subdivisions=4, radius=0.3)
     box = trimesh.creation.box(extents=(0.8, 0.5, 0.4))
     box.apply_translation((1.0, 0.1, 0.0))
-    mesh = trimesh.util.concatenate([sphere, box])
+    mesh = joined([sphere, box])
     return np.asarray(mesh.vertices), np.asarray(mesh.faces)
 
 

@@ -109,7 +109,7 @@ def test_five_pool_kills_in_a_row_and_every_queued_job_still_finishes(tmp_path):
             assert [j.status for j in rows] == ["succeeded"] * len(ids), [(j.status, j.error_code) for j in rows]
         finally:
             worker.stop(grace=5)
-        assert worker.proc.poll() is not None and not group(worker.proc.pid)
+        assert worker.proc is not None and worker.proc.poll() is not None and not group(worker.proc.pid)
 
 
 def free_port() -> int:

@@ -29,7 +29,7 @@ def job_id(tmp_path):
 
 def get(job_id) -> Job:
     with session_scope() as s:
-        return s.get(Job, job_id)
+        return s.get_one(Job, job_id)
 
 
 def test_only_one_claim_wins(job_id):
@@ -43,12 +43,12 @@ def test_only_one_claim_wins(job_id):
 def test_a_stale_attempt_cannot_finish_or_report(job_id):
     with session_scope() as s:
         old = state.claim(s, job_id, "w1", 60)
-        s.get(Job, job_id).lease_expires_at = state.now() - timedelta(seconds=1)
+        s.get_one(Job, job_id).lease_expires_at = state.now() - timedelta(seconds=1)
         s.commit()
         requeued, lost = state.reconcile(s, max_attempts=3, requeue_after_seconds=60)
         assert requeued == [job_id] and lost == []
         new = state.claim(s, job_id, "w2", 60)
-        assert new.attempt == 2
+        assert old is not None and new is not None and new.attempt == 2
         assert not state.report_progress(s, old, "skin", 0.5)
         assert not state.succeed(s, old, [])
         assert state.heartbeat(s, old, 60) is None
@@ -61,7 +61,7 @@ def test_lost_job_past_max_attempts_fails_as_worker_lost(job_id):
     with session_scope() as s:
         for _ in range(2):
             state.claim(s, job_id, "w", 60)
-            s.get(Job, job_id).lease_expires_at = state.now() - timedelta(seconds=1)
+            s.get_one(Job, job_id).lease_expires_at = state.now() - timedelta(seconds=1)
             s.commit()
             state.reconcile(s, max_attempts=2, requeue_after_seconds=60)
     job = get(job_id)
@@ -70,7 +70,7 @@ def test_lost_job_past_max_attempts_fails_as_worker_lost(job_id):
 
 def test_stale_queued_job_is_resent_and_live_lease_is_left_alone(job_id):
     with session_scope() as s:
-        s.get(Job, job_id).enqueued_at = state.now() - timedelta(seconds=120)
+        s.get_one(Job, job_id).enqueued_at = state.now() - timedelta(seconds=120)
         s.commit()
         assert state.reconcile(s, max_attempts=3, requeue_after_seconds=60) == ([job_id], [])
         assert state.reconcile(s, max_attempts=3, requeue_after_seconds=60) == ([], [])  # just re-sent
@@ -81,6 +81,7 @@ def test_stale_queued_job_is_resent_and_live_lease_is_left_alone(job_id):
 def test_cancel_stops_a_running_attempt(job_id):
     with session_scope() as s:
         c = state.claim(s, job_id, "w", 60)
+        assert c is not None
         assert state.cancel(s, job_id)
         assert state.heartbeat(s, c, 60) == "canceled"
         assert not state.succeed(s, c, [])

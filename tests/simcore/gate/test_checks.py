@@ -38,6 +38,7 @@ def test_sound_rig_and_bend_pass_every_check(tmp_path):
 
 
 def _with_weights(state: PipelineState, edit) -> PipelineState:  # noqa: ANN001 - edit: (V, J) array → None
+    assert state.weights is not None
     w = state.weights.toarray()
     edit(w)
     state.weights = sp.csr_matrix(w)
@@ -72,16 +73,19 @@ def test_nan_and_unnormalised_weights_are_flagged(tmp_path):
 
 def test_joint_outside_and_zero_length_bone_warn_but_never_fail(tmp_path):
     state = rig_state(tmp_path, "fail")
+    assert state.skeleton is not None
     state.skeleton.positions[2] = [0.0, 2.0, 0.0]  # the tip joint far above the capsule
     codes = run_checks(state, "skeleton")
     assert codes["joints_outside"]["figure"] == pytest.approx(2 / 3) and not codes["joints_outside"]["hard"]
     state = rig_state(tmp_path, "fail")
+    assert state.skeleton is not None
     state.skeleton.positions[2] = state.skeleton.positions[1]
     assert run_checks(state, "skeleton")["zero_length_bones"]["figure"] == pytest.approx(0.5)
 
 
 def test_a_collapse_in_one_frame_of_the_clip_fails_the_motion_stage(tmp_path):
     state = rig_state(tmp_path, "fail", bend=0.0, frames=7)
+    assert state.animation is not None
     state.animation.translations[3, 1, 1] = 0.05  # frame 3 only: the upper half drops into the lower
     with pytest.raises(QualityGateFailed):
         run_checks(state, "motion")
@@ -98,6 +102,7 @@ def test_refinement_torn_by_a_driver_spike_is_flagged(tmp_path):
     def refine(spike: float) -> PipelineState:
         state = rig_state(tmp_path, "warn", bend=30.0)
         state.options = JobOptions(quality_gate="warn", refine=RefineOptions(enabled=True, grid=32, preroll_frames=1, substeps=20))
+        assert state.animation is not None
         state.animation.translations[3, 0, 0] += spike  # the root jumps `spike` m for one frame (50 m/s at 2 m)
         state.stage = "refine"
         refine_stage.run(state, StageProgress("refine", 0.0, 1.0, lambda name, f: None, lambda: None))
@@ -116,6 +121,7 @@ def test_refinement_torn_by_a_driver_spike_is_flagged(tmp_path):
 
 def test_refinement_nan_is_a_hard_failure(tmp_path):
     state = rig_state(tmp_path, "warn")
+    assert state.mesh is not None and state.animation is not None
     state.refined_frames = np.stack([state.mesh.vertices.astype(np.float32)] * 6)
     state.report["refine"] = {"clamped": {"non_finite_vertices_replaced_by_lbs": 4, "det_f": 0}, "particles": 100, "substeps_run": 10}
     state.animation.rotations[:] = [0, 0, 0, 1]

@@ -7,6 +7,7 @@ import base64
 import io
 import json
 import struct
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -66,15 +67,15 @@ def studio_rig(order: list[str], *, image_uri: str | None = None, animated: bool
     bones = {**CHAIN, **(SWORD if "sword" in order else {})}
     v, f, uv, owner = _geometry("sword" in order)
     ji, wi = _weights(v, owner, order)
-    nodes = [{"name": "character", "mesh": 0, "skin": 0}]
-    node_of = {}
+    nodes: list[dict[str, Any]] = [{"name": "character", "mesh": 0, "skin": 0}]
+    node_of: dict[str, int] = {}
     for name in bones:
         node_of[name] = len(nodes)
         nodes.append({"name": name, "translation": bones[name][1]})
     for name, (parent, _) in bones.items():
         if parent:
             nodes[node_of[parent]].setdefault("children", []).append(node_of[name])
-    world = {}
+    world: dict[str, np.ndarray] = {}
     for name, (parent, t) in bones.items():
         world[name] = np.add(world[parent], t) if parent else np.asarray(t)
     ibm = np.stack([np.eye(4) for _ in order])

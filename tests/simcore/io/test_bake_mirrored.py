@@ -29,9 +29,9 @@ def test_baked_triangles_keep_facing_outwards(scale: list[float]) -> None:
 
 def _triangle_gltf(scale: list[float]) -> bytes:
     """One triangle with normals and tangents (w = +1) under a node with `scale`."""
-    pos = np.float32([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
-    normals = np.float32([[0, 0, 1]] * 3)
-    tangents = np.float32([[1, 0, 0, 1]] * 3)
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
+    normals = np.array([[0, 0, 1]] * 3, dtype=np.float32)
+    tangents = np.array([[1, 0, 0, 1]] * 3, dtype=np.float32)
     blobs = [pos.tobytes(), normals.tobytes(), tangents.tobytes()]
     offsets = np.cumsum([0] + [len(b) for b in blobs])
     doc = {

@@ -21,6 +21,7 @@ def fox(dev_assets):
     data = (dev_assets / "fox.glb").read_bytes()
     asset = read_rigged_asset(GltfDocument.from_bytes(data))
     scene = trimesh.load(dev_assets / "fox.glb", process=False, force="scene")
+    assert isinstance(scene, trimesh.Scene)
     geometry = list(scene.geometry.values())
     static = trimesh.exchange.gltf.export_glb(trimesh.Scene(geometry), include_normals=True)  # the ingest contract
     orient = Rotation.from_matrix(asset.bind_matrices[:, :3, :3]).as_quat()

@@ -40,6 +40,7 @@ def test_every_output_carries_the_descriptive_names(tmp_path, options):
 
     state = _run(tmp_path, **options)
     expected = ["root", "spine_01", "spine_02", "head"]
+    assert state.skeleton is not None and state.animation is not None
     assert state.skeleton.names == expected and state.animation.joint_names == expected
     assert _glb_names(state, "rigged.glb") == expected and _glb_names(state, "animated.glb") == expected
     assert json.loads(state.artifacts["skeleton.json"].read_text())["names"] == expected
@@ -51,6 +52,7 @@ def test_every_output_carries_the_descriptive_names(tmp_path, options):
 
 def test_keep_mode_keeps_the_uploads_names(tmp_path):
     state = _run(tmp_path, skeleton="keep")
+    assert state.skeleton is not None
     assert state.skeleton.names == ["joint_0", "joint_1", "joint_2", "joint_3"]
     assert _glb_names(state, "rigged.glb") == state.skeleton.names
     assert state.report["naming"]["preset"] is None

@@ -30,14 +30,15 @@ def _progress(seen: list) -> StageProgress:
 
 
 def test_stage_writes_and_validates_every_output(tmp_path):
-    state, seen = _state(tmp_path, animated=True), []
+    state = _state(tmp_path, animated=True)
+    seen: list[float] = []
     export_stage.run(state, _progress(seen))
     names = {"rigged.glb", "rigged.usdc", "rigged.usdz", "animated.glb", "animated.usdc", "animated.usdz",
              "refined.glb", "refined.usdc"}
     assert names | {"texture_0.png"} <= set(state.artifacts) and all(state.artifacts[n].is_file() for n in names)
     assert set(state.report["validation"]) == names
     assert all(v["errors"] == 0 for v in state.report["validation"].values()), state.report["validation"]
-    assert state.report["weights"]["vertices"] == state.weights.shape[0]
+    assert state.weights is not None and state.report["weights"]["vertices"] == state.weights.shape[0]
     assert state.report["export"]["refined.glb"]["morph"]["targets"] == 6
     assert seen[-1] == 1.0 and seen == sorted(seen)
 

@@ -4,6 +4,7 @@ and the job's report says so (issue 25)."""
 from __future__ import annotations
 
 import builtins
+from typing import Any
 
 import pytest
 
@@ -17,7 +18,7 @@ PNG_DATA = "data:image/png;base64,iVBORw0KGgo="
 
 
 def test_dropping_an_image_renumbers_textures_and_clears_the_slots_that_used_it():
-    gltf = {
+    gltf: dict[str, Any] = {
         "images": [{"uri": "guard1_body.png"}, {"uri": PNG_DATA}, {"uri": "C:/work/turtle1.png"}],
         "textures": [{"source": 0}, {"source": 1, "sampler": 0},
                      {"source": 2, "extensions": {"EXT_texture_webp": {"source": 1}}}],

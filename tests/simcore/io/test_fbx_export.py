@@ -3,6 +3,8 @@ bones, bind positions, skin weights (max difference <= 1e-3) and posed vertices 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -43,7 +45,8 @@ def exported(tmp_path_factory):
     weights = falloff_weights(mesh.vertices, skeleton, keep=3)
     animation = bend_animation(skeleton, frames=12, fps=24.0)
     out = {}
-    for name, extra in (("rigged", {}), ("animated", {"animation": animation})):
+    plans: list[tuple[str, dict[str, Any]]] = [("rigged", {}), ("animated", {"animation": animation})]
+    for name, extra in plans:
         write_rigged_glb(glb, skeleton, weights, out_path=tmp / f"{name}.glb", **extra)
         write_fbx(tmp / f"{name}.glb", tmp / f"{name}.fbx", fps=animation.fps)
         out[name] = (GltfDocument.from_bytes((tmp / f"{name}.glb").read_bytes()),

@@ -73,6 +73,7 @@ def test_pygltflib_and_trimesh_see_the_same_rig(rigged):
     assert [doc.nodes[n].name for n in doc.skins[0].joints] == skeleton.names
     assert doc.accessors[doc.meshes[0].primitives[0].attributes.POSITION].count == weights.shape[0]
     scene = trimesh.load(io.BytesIO(export.data), file_type="glb", process=False, force="scene")
+    assert isinstance(scene, trimesh.Scene)
     assert sum(len(g.vertices) for g in scene.geometry.values()) == weights.shape[0]
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import json
+from typing import Any
 
 import numpy as np
 import pytest
@@ -30,7 +31,7 @@ def _robot_gltf(rigid_parent: int | None) -> bytes:
     for k in (0, 4):
         accessors[k] |= {"min": TRIANGLE.min(0).tolist(), "max": TRIANGLE.max(0).tolist()}
     quarter = [0.0, 0.0, float(np.sin(np.pi / 4)), float(np.cos(np.pi / 4))]
-    nodes = [
+    nodes: list[dict[str, Any]] = [
         {"name": "root", "children": [1]},
         {"name": "arm", "translation": [0, 1, 0], "rotation": quarter, "children": []},
         {"name": "body", "mesh": 0, "skin": 0},

@@ -28,7 +28,7 @@ def _gltf_with_shapes() -> tuple[bytes, np.ndarray, np.ndarray]:
     pos = (CAPSULE.vertices @ R).astype(np.float32)  # R @ pos_file = capsule upright
     normals = (CAPSULE.vertex_normals @ R).astype(np.float32)
     bulge = (0.05 * normals * (pos[:, :1] > 0)).astype(np.float32)
-    shift = np.tile(np.float32([0.05, 0.0, 0.0]), (len(pos), 1))
+    shift = np.tile(np.array([0.05, 0.0, 0.0], dtype=np.float32), (len(pos), 1))
     faces = CAPSULE.faces.astype(np.uint32).reshape(-1)
     blobs = [pos.tobytes(), normals.tobytes(), faces.tobytes(), bulge.tobytes(), shift.tobytes()]
     offsets = np.cumsum([0] + [len(b) for b in blobs])

@@ -29,6 +29,7 @@ def test_any_skin_order_reads_as_one_parents_first_tree(order):
     asset = read_rigged_asset(GltfDocument.from_bytes(to_glb(studio_rig(order))))
     skeleton = asset.skeleton.validate()
     assert skeleton.names[0] == "hips" and skeleton.parents[0] == -1
+    assert skeleton.file_order is not None and skeleton.file_parents is not None
     assert [order[k] for k in skeleton.file_order] == skeleton.names
     heaviest = np.asarray(asset.weights.sum(axis=0)).ravel()
     assert skeleton.names[int(np.argmax(heaviest))] in ("spine", "hips")  # columns follow the joints they weigh

@@ -80,7 +80,7 @@ def test_refined_usdc_holds_time_sampled_points(rig, tmp_path):
 
 
 def test_joint_names_become_unique_usd_paths():
-    skeleton = Skeleton(np.zeros((4, 3)), [-1, 0, 0, 1], ["mixamorig:Hips", "a b", "a_b", "1st"])
+    skeleton = Skeleton(np.zeros((4, 3)), np.array([-1, 0, 0, 1]), ["mixamorig:Hips", "a b", "a_b", "1st"])
     assert joint_paths(skeleton) == ["mixamorig_Hips", "mixamorig_Hips/a_b", "mixamorig_Hips/a_b_1",
                                      "mixamorig_Hips/a_b/_1st"]
 

@@ -65,7 +65,7 @@ def test_bone_points_are_dense_and_keep_the_ends() -> None:
 
 def test_ground_truth_keeps_influencing_joints_and_their_ancestors() -> None:
     # 0 root (no weight) → 1 (no weight) → 2 (weighted); 0 → 3 (no weight, no weighted descendant).
-    skel = Skeleton(np.eye(4, 3), [-1, 0, 1, 0], ["root", "mid", "tip", "unused"])
+    skel = Skeleton(np.eye(4, 3), np.array([-1, 0, 1, 0]), ["root", "mid", "tip", "unused"])
     weights = sp.csr_matrix(np.array([[0.0, 0.0, 1.0, 0.0]]))
     kept = used_skeleton(skel, used_joints(skel, weights))
     assert kept.names == ["root", "mid", "tip"] and kept.parents.tolist() == [-1, 0, 1]

@@ -32,8 +32,8 @@ def humanoid(arm_drop_degrees: float = 0.0, prefix: str = "mixamorig:", scale: f
         for part in ("ForeArm", "Hand"):
             pos[f"{side}{part}"] = pivot + rot @ (pos[f"{side}{part}"] - pivot)
     names = list(BODY_JOINTS)
-    parents = [-1 if BODY_PARENTS[n] is None else names.index(BODY_PARENTS[n]) for n in names]
-    return Skeleton(np.array([pos[n] for n in names]) * scale, parents, [prefix + n for n in names],
+    parents = [-1 if (parent := BODY_PARENTS[n]) is None else names.index(parent) for n in names]
+    return Skeleton(np.array([pos[n] for n in names]) * scale, np.array(parents), [prefix + n for n in names],
                     [JointKind.BODY] * len(names)).validate()
 
 

@@ -48,7 +48,8 @@ def test_bvh_upload_sets_animation_and_report(tmp_path):
     seen: list[float] = []
     stage.run(state, _progress(seen))
     anim = state.animation
-    assert anim is not None and anim.joint_names == state.skeleton.names and anim.fps == 10
+    assert anim is not None and state.skeleton is not None
+    assert anim.joint_names == state.skeleton.names and anim.fps == 10
     assert anim.rotations.shape == (7, 22, 4) and np.all(np.isfinite(anim.translations))
     rep = state.report["motion"]
     assert rep["status"] == "retargeted" and rep["joint_map"]["mixamorig:LeftUpLeg"] == "LeftUpLeg"

@@ -46,7 +46,7 @@ def test_refine_stage_sets_frames_and_reports_volume(capsule, tmp_path):
     seen: list[float] = []
     refine_stage.run(state, StageProgress("refine", 0.0, 1.0, lambda name, f: seen.append(f), lambda: None))
     report = state.report["refine"]
-    assert state.refined_frames.shape == (6, len(vertices), 3)
+    assert state.refined_frames is not None and state.refined_frames.shape == (6, len(vertices), 3)
     assert len(report["volume_ratio_lbs"]) == len(report["volume_ratio_refined"]) == 6
     # LBS collapses the bent joint; the simulated volume keeps more of it
     assert report["max_volume_change_refined"] < report["max_volume_change_lbs"]

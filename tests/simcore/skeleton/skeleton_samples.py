@@ -3,6 +3,7 @@ and the used-joint skeletons of the rigged dev assets."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,8 @@ from simcore.skeleton.vocab import quantize
 
 def distinct_bin_positions(rng: np.random.Generator, count: int) -> np.ndarray:
     """(count, 3) points in [-0.98, 0.98]^3 whose coordinate bins are pairwise distinct (no decoding ties)."""
-    out, seen = [], set()
+    out: list[np.ndarray] = []
+    seen: set[tuple[int, ...]] = set()
     while len(out) < count:
         p = rng.uniform(-0.98, 0.98, 3)
         key = tuple(quantize(p).tolist())
@@ -36,8 +38,10 @@ def random_tree(rng: np.random.Generator, joints: int, *, template: str = "none"
     names: list[str] = []
     parents: list[int] = []
     kinds: list[JointKind] = []
-    blocks = {"none": [], "body": [(BODY_JOINTS, BODY_PARENTS, JointKind.BODY)],
-              "hand": [(BODY_JOINTS, BODY_PARENTS, JointKind.BODY), (HAND_JOINTS, HAND_PARENTS, JointKind.HAND)]}[template]
+    templates: dict[str, list[tuple[tuple[str, ...], Mapping[str, str | None], JointKind]]] = {
+        "none": [], "body": [(BODY_JOINTS, BODY_PARENTS, JointKind.BODY)],
+        "hand": [(BODY_JOINTS, BODY_PARENTS, JointKind.BODY), (HAND_JOINTS, HAND_PARENTS, JointKind.HAND)]}
+    blocks = templates[template]
     for block, block_parents, kind in blocks:
         for name in block:
             parent = block_parents[name]
@@ -52,7 +56,7 @@ def random_tree(rng: np.random.Generator, joints: int, *, template: str = "none"
     parents_arr = np.asarray(parents)
     first_free = len(names) - joints
     candidates = np.arange(max(first_free, 1), len(names))
-    roots = rng.choice(candidates, size=min(spring_roots, len(candidates)), replace=False) if len(candidates) else []
+    roots: np.ndarray | list[int] = rng.choice(candidates, size=min(spring_roots, len(candidates)), replace=False) if len(candidates) else []
     for root in roots:
         for j in range(int(root), len(names)):
             if _descends(parents_arr, j, int(root)):

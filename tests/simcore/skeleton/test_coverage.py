@@ -10,11 +10,12 @@ from simcore.geometry.parts import surface_parts
 from simcore.skeleton.coverage import unreached_parts
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import Skeleton
+from tests.meshes import joined
 
 
 def _with(extra: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray, int]:
     vertices, faces, _ = stick_humanoid()
-    both = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), extra])
+    both = joined([trimesh.Trimesh(vertices, faces, process=False), extra])
     return np.asarray(both.vertices), np.asarray(both.faces), len(faces)
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import trimesh
 
 from simcore.skeleton.finger_template import section_loops, template_fingers
+from tests.meshes import joined
 
 WRIST, ELBOW, FORWARD = np.array([0.0, 0.0, 0.0]), np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
 
@@ -22,7 +23,7 @@ def left_hand(fingers: bool) -> tuple[np.ndarray, np.ndarray]:
         parts += [box([0.4, -0.04, z], [0.8, 0.04, z + 0.096]) for z in (-0.2, -0.1, 0.0, 0.1)]
     else:
         parts.append(box([0.4, -0.04, -0.2], [0.8, 0.04, 0.2]))
-    mesh = trimesh.util.concatenate(parts).subdivide().subdivide()  # real hands have many vertices
+    mesh = joined(parts).subdivide().subdivide()  # real hands have many vertices
     return np.asarray(mesh.vertices), np.asarray(mesh.faces)
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 import trimesh
@@ -18,6 +20,7 @@ from simcore.skeleton.mirror import MirrorPlane
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.symmetry import MirrorTwins
 from simcore.skeleton.types import Skeleton
+from tests.meshes import joined
 
 
 def chamfer(a: np.ndarray, b: np.ndarray) -> float:
@@ -81,7 +84,7 @@ def test_max_joints_is_respected(dog):
 def test_separate_bodies_are_joined_into_one_tree():
     a = capsule_between(np.array([0.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), 0.1)
     b = capsule_between(np.array([0.6, 0.0, 0.0]), np.array([0.6, 0.6, 0.0]), 0.1)
-    mesh = trimesh.util.concatenate([a, b])
+    mesh = joined([a, b])
     skeleton, report = geometric_skeleton(mesh.vertices, mesh.faces)
     skeleton.validate()
     assert report["bodies"] == 2 and report["bodies_joined"] == 1
@@ -98,7 +101,8 @@ def test_predict_rejects_empty_meshes_and_unknown_methods(dog):
     assert err.value.field == "options.skeleton"
     for option in ("up_axis", "forward_axis"):  # whichever method runs (the geometric one reads no facing)
         with pytest.raises(InvalidInput) as err:
-            predict_skeleton(vertices, faces, method="geometric", **{option: "sideways"})
+            axis: dict[str, Any] = {option: "sideways"}
+            predict_skeleton(vertices, faces, method="geometric", **axis)
         assert err.value.field == f"options.{option}"
 
 
@@ -278,7 +282,7 @@ def _ring_round_a_slit(top: float, bottom: float) -> trimesh.Trimesh:
     upper, lower = top + gap / 2, -(bottom + gap / 2)
     ends = [((0, upper), (1, upper), top), ((0, lower), (1, lower), bottom), ((0, upper), (0, lower), bottom),
             ((1, upper), (1, lower), bottom), ((1, upper), (1.6, upper), 0.06)]
-    return trimesh.util.concatenate([capsule_between(np.array([*a, 0.0]), np.array([*b, 0.0]), r) for a, b, r in ends])
+    return joined([capsule_between(np.array([*a, 0.0]), np.array([*b, 0.0]), r) for a, b, r in ends])
 
 
 def test_cavity_in_a_body_is_closed_so_the_skeleton_runs_through_the_body():

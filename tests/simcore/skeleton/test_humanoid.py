@@ -13,6 +13,7 @@ from simcore.skeleton.humanoid import CONFIDENT, SIDEWAYS_CONFIDENT, fit_humanoi
 from simcore.skeleton.mixamo import BODY_JOINTS, full_name
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import JointKind
+from tests.meshes import joined
 
 LIMB_ENDS = ("LeftHand", "RightHand", "LeftFoot", "RightFoot", "Head", "Hips", "LeftForeArm", "RightLeg")
 
@@ -119,7 +120,7 @@ def test_a_tail_becomes_a_spring_chain_under_the_template():
 
     vertices, faces, _ = stick_humanoid()
     tail = capsule_between(np.array([0.0, 0.95, -0.1]), np.array([0.0, 0.7, -0.85]), 0.05)
-    mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), tail])
+    mesh = joined([trimesh.Trimesh(vertices, faces, process=False), tail])
     fit = fit_humanoid(np.asarray(mesh.vertices), np.asarray(mesh.faces))
     assert fit.skeleton is not None, fit.report
     skeleton = fit.skeleton.validate()

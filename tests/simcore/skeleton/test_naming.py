@@ -32,9 +32,14 @@ def _dev_humanoids(dev_assets) -> list[str]:
 def humanoid_rigs(dev_assets) -> dict[str, Skeleton]:
     from simcore.ingest import ingest
 
+    def artist_skeleton(name: str) -> Skeleton:
+        rig = ingest((dev_assets / name).read_bytes(), "glb").source_rig
+        assert rig is not None, name
+        return rig.skeleton
+
     files = _dev_humanoids(dev_assets)
     assert len(files) >= 8
-    return {name: ingest((dev_assets / name).read_bytes(), "glb").source_rig.skeleton for name in files}
+    return {name: artist_skeleton(name) for name in files}
 
 
 def _is_left(name: str, preset: str) -> bool:

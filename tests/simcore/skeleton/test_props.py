@@ -11,6 +11,7 @@ from simcore.geometry.parts import surface_parts
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.props import parts_to_try_without
 from simcore.skinning.predict import compute_weights
+from tests.meshes import joined
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +21,7 @@ def swordsman() -> tuple[np.ndarray, np.ndarray, int]:
     hand = np.asarray(joints["RightHand"])
     sword = capsule_between(hand + [0.0, -0.1, 0.05], hand + [0.0, 0.9, 0.05], 0.02)
     body = trimesh.Trimesh(vertices, faces, process=False)
-    both = trimesh.util.concatenate([body, sword])
+    both = joined([body, sword])
     return np.asarray(both.vertices), np.asarray(both.faces), len(body.vertices)
 
 
@@ -49,7 +50,7 @@ def test_a_humanoid_in_a_skirt_is_fitted_without_it() -> None:
     skirt.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))  # apex up (+Y)
     skirt.apply_translation([0.0, 0.12, 0.0])
     side = ~(np.abs(skirt.vertices[skirt.faces][:, :, 1] - 0.12) < 1e-6).all(axis=1)  # open at the hem
-    both = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False),
+    both = joined([trimesh.Trimesh(vertices, faces, process=False),
                                      trimesh.Trimesh(skirt.vertices, skirt.faces[side], process=False)])
     prediction = predict_skeleton(both.vertices, both.faces, method="auto")
     assert prediction.method == "humanoid"  # the skirt's shell gave 48 geometric joints before
@@ -59,7 +60,7 @@ def test_a_humanoid_in_a_skirt_is_fitted_without_it() -> None:
 def test_a_part_inside_the_silhouette_is_not_tried_away() -> None:
     vertices, faces, _ = stick_humanoid()
     belt = capsule_between(np.array([-0.15, 0.95, 0.0]), np.array([0.15, 0.95, 0.0]), 0.03)  # within the body's box
-    both = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), belt])
+    both = joined([trimesh.Trimesh(vertices, faces, process=False), belt])
     belt_faces = np.arange(len(faces), len(both.faces))
     assert not any(mask[belt_faces].any() for mask in parts_to_try_without(surface_parts(both.vertices, both.faces), len(both.faces)))
     one_piece = capsule_between(np.array([0.0, 0.2, 0.0]), np.array([0.0, 1.5, 0.0]), 0.2)

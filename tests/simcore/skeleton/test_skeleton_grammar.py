@@ -17,7 +17,8 @@ SPECIALS = np.arange(NUM_BINS, 267)
 
 def random_walk(grammar: SkeletonGrammar, rng: np.random.Generator, special_bias: float) -> list[int]:
     """Sample allowed tokens until <eos>; specials are chosen with probability `special_bias` when legal."""
-    state, tokens = grammar.initial(), []
+    state = grammar.initial()
+    tokens: list[int] = []
     while not state.complete:
         mask = grammar.allowed(state)
         assert mask.any(), f"dead end after {tokens}"

@@ -55,7 +55,7 @@ def test_vocabulary_matches_unirig_release() -> None:
 def test_quantisation_floor_and_bin_centres() -> None:
     x = np.array([-1.0, -1.0 + 1e-9, -0.99, 0.0, 0.5, 1.0, 7.0, -7.0])
     np.testing.assert_array_equal(quantize(x), [0, 0, 1, 128, 192, 255, 255, 0])
-    np.testing.assert_allclose(dequantize([0, 128, 255]), [-1 + 1 / 256, 1 / 256, 1 - 1 / 256])
+    np.testing.assert_allclose(dequantize(np.array([0, 128, 255])), [-1 + 1 / 256, 1 / 256, 1 - 1 / 256])
 
 
 def test_axis_mapping_is_a_rotation_from_y_up_to_z_up() -> None:
@@ -66,7 +66,8 @@ def test_axis_mapping_is_a_rotation_from_y_up_to_z_up() -> None:
 
 def test_chain_costs_three_tokens_per_joint_and_branches_seven() -> None:
     # Root at the bottom, two children: the lower child (in model z = our y) is visited first.
-    skel = Skeleton([[0, 0, 0], [0, 0.5, 0], [0.2, -0.5, 0], [0.2, -0.8, 0]], [-1, 0, 0, 2], ["r", "up", "down", "foot"])
+    skel = Skeleton(np.array([[0, 0, 0], [0, 0.5, 0], [0.2, -0.5, 0], [0.2, -0.8, 0]]), np.array([-1, 0, 0, 2]),
+                    ["r", "up", "down", "foot"])
     tokens = TOK.encode(skel, IDENTITY)
     b = lambda p: quantize(TOK.model_frame(np.asarray([p], float))[0]).tolist()  # noqa: E731
     expected = [BOS, CLASS_TOKENS["none"], *b([0, 0, 0]), *b([0.2, -0.5, 0]), *b([0.2, -0.8, 0]),
@@ -130,13 +131,13 @@ def test_mixamo_rig_uses_body_and_hand_blocks(dev_assets) -> None:
 
 def test_coincident_joints_resolve_to_the_ancestor() -> None:
     # Joint 1 sits exactly on its parent 0, which has a second child: the branch must go back to 0.
-    skel = Skeleton([[0, 0, 0], [0, 0, 0], [0, -0.5, 0], [0.5, 0.5, 0]], [-1, 0, 1, 0], ["a", "a_dup", "b", "c"])
+    skel = Skeleton(np.array([[0, 0, 0], [0, 0, 0], [0, -0.5, 0], [0.5, 0.5, 0]]), np.array([-1, 0, 1, 0]), ["a", "a_dup", "b", "c"])
     tokens = assert_round_trip(skel, IDENTITY)
     assert (tokens == BRANCH).sum() == 1
 
 
 def test_decode_accepts_trailing_padding_and_rejects_bad_sequences() -> None:
-    skel = Skeleton([[0, 0, 0], [0, 0.5, 0]], [-1, 0], ["a", "b"])
+    skel = Skeleton(np.array([[0, 0, 0], [0, 0.5, 0]]), np.array([-1, 0]), ["a", "b"])
     tokens = TOK.encode(skel, IDENTITY)
     padded = np.concatenate([tokens, [PAD, PAD]])
     assert TOK.decode(padded, IDENTITY).num_joints == 2
@@ -152,4 +153,4 @@ def test_normalisation_from_mesh_bbox() -> None:
     norm = Normalization.from_points(np.array([[0.0, 0.0, 0.0], [2.0, 4.0, 1.0]]))
     np.testing.assert_allclose(norm.center, [1.0, 2.0, 0.5])
     assert norm.scale == 2.0
-    np.testing.assert_allclose(norm.to_unit([[2.0, 4.0, 1.0]]), [[0.5, 1.0, 0.25]])
+    np.testing.assert_allclose(norm.to_unit(np.array([[2.0, 4.0, 1.0]])), [[0.5, 1.0, 0.25]])

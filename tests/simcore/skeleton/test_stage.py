@@ -42,6 +42,7 @@ def test_geometric_stage_writes_skeleton_json_and_sets_state(tmp_path):
     doc = json.loads((tmp_path / "skeleton.json").read_text())
     skeleton = Skeleton.from_dict(doc)
     assert doc["method"] == "geometric" and skeleton.num_joints <= 20
+    assert state.skeleton is not None
     np.testing.assert_allclose(skeleton.positions, state.skeleton.positions, atol=1e-6)
     assert state.artifacts["skeleton.json"] == tmp_path / "skeleton.json"
     assert state.report["skeleton"]["joints"] == skeleton.num_joints
@@ -52,6 +53,7 @@ def test_geometric_stage_writes_skeleton_json_and_sets_state(tmp_path):
 def test_keep_uses_the_uploads_own_skeleton(tmp_path):
     state, seen = make_state(tmp_path, with_rig=True, skeleton="keep")
     stage.run(state, progress_into(seen))
+    assert state.skeleton is not None and state.mesh is not None and state.mesh.source_rig is not None
     assert state.skeleton.names == state.mesh.source_rig.skeleton.names
     assert json.loads((tmp_path / "skeleton.json").read_text())["method"] == "keep"
 

@@ -15,6 +15,7 @@ from simcore.skeleton.humanoid import fit_humanoid
 from simcore.skeleton.mirror import MirrorPlane
 from simcore.skeleton.symmetry import body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import Skeleton
+from tests.meshes import joined
 
 ACROSS_Z = MirrorPlane(2, 0.0)  # the capsule dog's left and right sides are ±z
 
@@ -33,7 +34,9 @@ def _skeleton(positions: np.ndarray, parents: np.ndarray) -> Skeleton:
 
 
 def _twins(positions: np.ndarray, parents: np.ndarray, grid, vertices: np.ndarray):
-    return mirror_twins(positions, parents, grid, body_mirror(vertices))
+    plane = body_mirror(vertices)
+    assert plane is not None
+    return mirror_twins(positions, parents, grid, plane)
 
 
 def test_the_dogs_geometric_skeleton_is_its_own_mirror_image():
@@ -63,7 +66,7 @@ def _box_creature():
                           [0.5, 0, 0], [1.0, -0.05, 0], [1.0, -0.01, 0]], dtype=np.float64)
     hump = trimesh.creation.box(extents=(0.4, 0.3, 0.3),
                                 transform=trimesh.transformations.translation_matrix([0, 0.6, 0.1]))
-    body = trimesh.util.concatenate([trimesh.creation.box(extents=(2.4, 1.0, 0.4)), hump])  # mirrors across x only
+    body = joined([trimesh.creation.box(extents=(2.4, 1.0, 0.4)), hump])  # mirrors across x only
     return positions, np.array([-1, 0, 1, 2, 0, 4, 5]), _solid(body), body.vertices
 
 
@@ -140,7 +143,8 @@ def test_the_foxs_hind_feet_both_get_their_tip_joint(dev_assets):
     skeleton, report = geometric_skeleton(rig.vertices, rig.faces)
     assert report["mirror"]["twins_added"] == 1
     size = float(np.ptp(rig.vertices, axis=0).max())
-    assert _asymmetry(skeleton.positions, body_mirror(rig.vertices)) < 1e-6 * size
+    plane = body_mirror(rig.vertices)
+    assert plane is not None and _asymmetry(skeleton.positions, plane) < 1e-6 * size
 
 
 def test_averaging_twins_leaves_no_zero_length_bone(dev_assets):
@@ -156,7 +160,7 @@ def test_averaging_twins_leaves_no_zero_length_bone(dev_assets):
 def test_a_dog_holding_a_sword_out_to_one_side_is_not_symmetrized():
     vertices, faces, _ = quadruped()
     sword = capsule_between(np.array([0.4, 0.6, 0.2]), np.array([0.4, 1.6, 0.9]), 0.05)
-    mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), sword])
+    mesh = joined([trimesh.Trimesh(vertices, faces, process=False), sword])
     assert body_mirror(mesh.vertices) is None
     assert geometric_skeleton(mesh.vertices, mesh.faces)[1]["mirror"] == {"axis": None}
 
@@ -200,6 +204,7 @@ def test_the_soldiers_fingers_mirror_their_namesakes(dev_assets):
     joints found no twins (neighbouring fingers' mirror images nearly coincide) and stayed 0.006-0.017 off."""
     rig = read_rigged_asset(GltfDocument.from_bytes((dev_assets / "soldier.glb").read_bytes()))
     fit = fit_humanoid(rig.vertices, rig.faces)
+    assert fit.skeleton is not None, fit.report
     names, pos = fit.skeleton.names, fit.skeleton.positions
     axis = "xyz".index(fit.report["mirror"]["axis"])
     plane = MirrorPlane(axis, float(rig.vertices[:, axis].mean()))

@@ -10,7 +10,8 @@ from simcore.errors import InvalidInput
 from simcore.metrics.skinning import weight_stats
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.geodesic import geodesic_distances
-from simcore.skinning.predict import compute_weights
+from simcore.skinning.predict import Method, compute_weights
+from tests.meshes import joined
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +40,7 @@ def _dominant_joint_near_bones(v: np.ndarray, skeleton: Skeleton, weights: np.nd
 
 
 @pytest.mark.parametrize("method", ["geodesic", "heat", "auto"])
-def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method: str) -> None:
+def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method: Method) -> None:
     v, f, skeleton = bent_tube
     result = compute_weights(v, f, skeleton, method=method, max_influences=2, smooth_iterations=2)
     w = result.weights.toarray()
@@ -78,7 +79,7 @@ def _u_tube() -> trimesh.Trimesh:
     base = trimesh.creation.capsule(height=1.2, radius=0.2, count=[12, 12])
     base.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))
     base.apply_translation([0.0, 0.0, -1.0])
-    return trimesh.util.concatenate(arms + [base])
+    return joined(arms + [base])
 
 
 def test_geodesic_distance_goes_around_not_across_a_gap() -> None:
@@ -146,7 +147,11 @@ def test_cancel_stops_both_methods(bent_tube, monkeypatch) -> None:
     monkeypatch.setattr(predict, "PROGRESS_POLL_S", 0.0)
     finished: list[bool] = []
     falloff = geodesic.falloff_weights
-    monkeypatch.setattr(geodesic, "falloff_weights", lambda *a, **k: finished.append(True) or falloff(*a, **k))
+    def counted_falloff(*a, **k):
+        finished.append(True)
+        return falloff(*a, **k)
+
+    monkeypatch.setattr(geodesic, "falloff_weights", counted_falloff)
 
     def cancel(fraction: float) -> None:
         raise Canceled("the job was canceled")
@@ -158,7 +163,7 @@ def test_cancel_stops_both_methods(bent_tube, monkeypatch) -> None:
 
 
 @pytest.mark.parametrize("method", ["geodesic", "heat"])
-def test_floating_part_and_single_joint_still_get_weights(bent_tube, method: str) -> None:
+def test_floating_part_and_single_joint_still_get_weights(bent_tube, method: Method) -> None:
     """A detached sphere far from every bone (an accessory) is weighted too; a one-joint skeleton works."""
     v, f, skeleton = bent_tube
     ball = trimesh.creation.icosphere(subdivisions=2, radius=0.2)

@@ -39,10 +39,10 @@ def test_deformation_protocol_matches_a_two_joint_hand_computation() -> None:
     ref = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 1.0]]))
     pred = sp.csr_matrix(np.array([[1.0, 0.0], [1.0, 0.0]]))
     rng = np.random.default_rng(0)
-    expected = []
+    expected: list[float] = []
     for _ in range(8):
         rotvec = rng.uniform(-1, 1, (2, 3)) * np.deg2rad(45) / np.sqrt(3)
-        expected += [0.0, np.linalg.norm(Rotation.from_rotvec(rotvec[1]).apply([1.0, 0, 0]) - [1.0, 0, 0]) / 2.0]
+        expected += [0.0, float(np.linalg.norm(Rotation.from_rotvec(rotvec[1]).apply([1.0, 0, 0]) - [1.0, 0, 0])) / 2.0]
     got = deformation_error(vertices, skeleton, pred, ref)
     assert np.isclose(got["deform_mean"], np.mean(expected))
     assert np.isclose(got["deform_p95"], np.percentile(expected, 95))

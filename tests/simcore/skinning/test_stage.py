@@ -23,7 +23,7 @@ def test_skin_stage_sets_weights_and_reports_scores(tmp_path: Path) -> None:
     state.skeleton = skeleton
     seen: list[float] = []
     stage.run(state, StageProgress("skin", 0.4, 0.2, lambda name, f: seen.append(f), lambda: None))
-    assert state.weights.shape == (len(vertices), skeleton.num_joints)
+    assert state.weights is not None and state.weights.shape == (len(vertices), skeleton.num_joints)
     np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
     report = state.report["skinning"]
     assert report["method"] in {"geodesic", "heat"} and set(report["scores"]) == {"geodesic", "heat"}
@@ -61,11 +61,11 @@ def _ik_rig(tmp_path: Path, **options) -> tuple[PipelineState, int]:
 def test_excluded_joints_get_no_weight_and_keep_their_column(tmp_path: Path) -> None:
     state, ik = _ik_rig(tmp_path)
     stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
-    assert state.weights[:, ik].sum() > 1.0  # left in, the IK target takes weight around the foot
+    assert state.weights is not None and state.weights[:, ik].sum() > 1.0  # left in, the IK target takes weight around the foot
 
     state, ik = _ik_rig(tmp_path, exclude_joints=["*_ik", "nothing*"])
     stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
-    assert state.weights.shape[1] == ik + 1 and state.weights[:, ik].sum() == 0.0
+    assert state.weights is not None and state.weights.shape[1] == ik + 1 and state.weights[:, ik].sum() == 0.0
     np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
     assert state.report["skinning"]["excluded_joints"] == ["Foot_IK"]
     assert [w["message"] for w in state.report["warnings"]] == ["options.exclude_joints pattern 'nothing*' matches no joint"]
