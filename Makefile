@@ -4,7 +4,7 @@ PYTHON ?= python3.11
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: run test install install-test web fbx-writer
+.PHONY: run test lint install install-test web fbx-writer
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -40,5 +40,10 @@ fbx-writer:
 	test -x .venv-fbx/bin/python || $(PYTHON) -m venv .venv-fbx
 	.venv-fbx/bin/pip install -q 'bpy==5.0.1' 'numpy<2'
 
-test: install-test
+# ruff and mypy (configured in pyproject.toml; mypy keeps its cache in .mypy_cache) before the suite.
+lint: $(VENV)/.installed-test
+	$(BIN)/ruff check .
+	$(BIN)/mypy
+
+test: install-test lint
 	$(BIN)/pytest

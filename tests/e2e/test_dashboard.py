@@ -174,8 +174,9 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
     assert page.get_attribute("#jobs-table [role=progressbar]", "aria-valuenow") == "100"
     page.screenshot(path=str(ARTIFACTS / "07-jobs-list.png"))
 
-    figures = {"jobs_page": first_load, "picked_joint": joint["name"], "heatmap_hot": round(float(hot), 3), "after_viewer_js_bytes": viewer_load["js_bytes"], "upload_progress": upload_progress,
-               "job_progress": job_progress, "canvas_covered": round(float(covered), 3), "heatmap_changed": round(float(changed), 3)}
+    figures = {"jobs_page": first_load, "picked_joint": joint["name"], "heatmap_hot": round(float(hot), 3),
+               "after_viewer_js_bytes": viewer_load["js_bytes"], "upload_progress": upload_progress, "job_progress": job_progress,
+               "canvas_covered": round(float(covered), 3), "heatmap_changed": round(float(changed), 3)}
     print("dashboard figures:", json.dumps(figures))
     (ARTIFACTS / "dashboard-figures.json").write_text(json.dumps(figures, indent=2))
     assert first_load["tti_ms"] is not None and first_load["js_bytes"] < 200_000  # three.js is loaded only by the viewer
@@ -330,8 +331,13 @@ def test_jobs_list_filters_pages_and_explains_failures(page, dashboard_server, d
 
 
 def test_progress_falls_back_to_polling_when_events_are_blocked(page, dashboard_server, dev_assets):
-    blocked = []
-    page.route("**/events*", lambda route: (blocked.append(route.request.url), route.abort()))
+    blocked: list[str] = []
+
+    def block(route) -> None:
+        blocked.append(route.request.url)
+        route.abort()
+
+    page.route("**/events*", block)
     sign_in(page, dashboard_server.local_key)
     page.goto("/#/new")
     page.set_input_files("#mesh", str(dev_assets / "fox.glb"))

@@ -42,7 +42,7 @@ def test_sliders_pose_the_picked_bone_and_reset_restores(page, dashboard_server,
     assert page.is_disabled("#viewer-pose-x")  # nothing to turn before a bone is picked
 
     heavy = vertices_per_joint(dashboard_server, page)
-    bone = max((n for n in heavy if n != "root" and n != "hips"), key=heavy.get)  # a limb or the spine, not the root
+    bone = max((n for n in heavy if n != "root" and n != "hips"), key=heavy.__getitem__)  # a limb or the spine, not the root
     page.select_option("#viewer-bone", bone)
     page.check("#viewer-color-texture")
     rest = canvas_pixels(page, "pose-1-rest")
