@@ -24,8 +24,8 @@ from simcore.skeleton.candidate_score import ShapeContext, score_candidate
 from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel
-from simcore.skeleton.shape_points import shape_points, surface_points
 from simcore.skeleton.section_centre import centre_in_section
+from simcore.skeleton.shape_points import shape_points, surface_points
 from simcore.skeleton.symmetry import body_mirror, mirror_twins, symmetrize
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import SkeletonTokenizer
