@@ -3,8 +3,7 @@
 The model reads `points` surface samples of the mesh (in the token frame, glTF +Y up), then writes candidate
 token sequences under the grammar (never an invalid tree): one greedy sequence per class token (articulation,
 Mixamo, the game-engine humanoid) and the rest sampled. Each candidate is scored without ground truth
-(`simcore.skeleton.candidate_score`) and the best one kept; its joints outside the solid are moved to the
-nearest inside voxel. The weights file is read once per process; a missing or corrupt file raises
+(`simcore.skeleton.candidate_score`) and the best one kept, then placed in the solid (`refined`). The weights file is read once per process; a missing or corrupt file raises
 ModelUnavailable with the path and the reason.
 """
 
@@ -76,23 +75,43 @@ def load_skeleton_model(path: Path = WEIGHTS) -> SkeletonTokenModel:
     return model
 
 
-def refined(skeleton: Skeleton, shape: ShapeContext) -> tuple[Skeleton, int]:
+def without_stacked(skeleton: Skeleton, shortest: float) -> Skeleton:
+    """The skeleton without joints closer than `shortest` (metres) to their parent, their children hung from that
+    parent: two joints in one coordinate bin make a bone with no direction to rotate about."""
+    pos, j = skeleton.positions, skeleton.num_joints
+    into = np.arange(j)  # the joint each joint is merged into (itself when kept)
+    parents = skeleton.parents.copy()
+    for k in range(1, j):  # parents come before their children
+        parents[k] = into[parents[k]]
+        if np.linalg.norm(pos[k] - pos[parents[k]]) < shortest:
+            into[k] = parents[k]
+    keep = np.flatnonzero(into == np.arange(j))
+    index = np.full(j, -1)
+    index[keep] = np.arange(len(keep))
+    kept_parents = np.where(parents[keep] >= 0, index[np.maximum(parents[keep], 0)], -1)
+    return Skeleton(pos[keep], kept_parents, [skeleton.names[k] for k in keep], [skeleton.kinds[k] for k in keep])
+
+
+def refined(skeleton: Skeleton, shape: ShapeContext) -> tuple[Skeleton, dict[str, int]]:
     """The decoded skeleton placed in the solid as the geometric method places its joints: chain joints towards
     their limb's cross-section centre (by at most SECTION_LIMIT voxels: decoded joints are a few bins off), mirror
-    twins averaged on a symmetric mesh, joints still outside moved to the nearest inside voxel. Returns it and
-    the number of joints the last step moved."""
+    twins averaged on a symmetric mesh, joints still outside moved to the nearest inside voxel, joints within half
+    a voxel of their parent merged into it. Returns it and how many joints the last two steps moved and merged."""
     pos = centre_in_section(skeleton.positions, skeleton.parents, shape.grid, SECTION_LIMIT)
     if shape.mirror is not None:
         pos = symmetrize(pos, mirror_twins(pos, skeleton.parents, shape.grid, shape.mirror, skeleton.names))
     inside = snap_inside(shape.grid, pos)
-    moved = int(np.count_nonzero(np.any(inside != pos, axis=1)))
-    return Skeleton(inside, skeleton.parents, skeleton.names, skeleton.kinds), moved
+    placed = Skeleton(inside, skeleton.parents, skeleton.names, skeleton.kinds)
+    merged = without_stacked(placed, 0.5 * shape.grid.pitch)
+    counts = {"moved_inside": int(np.count_nonzero(np.any(inside != pos, axis=1))),
+              "stacked_merged": placed.num_joints - merged.num_joints}
+    return merged, counts
 
 
 def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = 16, seed: int = 0,
                      model_path: Path | None = None) -> tuple[Skeleton, dict]:
     """The best of `candidates` decoded skeletons for a mesh (vertices (V, 3) metres, +Y up; faces (F, 3)), in the
-    mesh's frame, and a report: each candidate's class and scores, the chosen one, joints moved inside.
+    mesh's frame, and a report: each candidate's class and scores, the chosen one, joints moved inside and merged.
     model_path: the weights file (None = the shipped WEIGHTS)."""
     model_path = WEIGHTS if model_path is None else model_path
     model = load_skeleton_model(model_path)
@@ -114,9 +133,9 @@ def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int
     skeletons = [tokenizer.decode(tokens, norm) for tokens, _ in decoded]
     scores = [score_candidate(s, shape, log_prob) for s, (_, log_prob) in zip(skeletons, decoded)]
     best = int(np.argmax([s.total for s in scores]))
-    chosen, moved = refined(skeletons[best], shape)
+    chosen, counts = refined(skeletons[best], shape)
     report = {
-        "chosen": best, "joints": chosen.num_joints, "moved_inside": moved, "symmetric": shape.mirror is not None,
+        "chosen": best, "joints": chosen.num_joints, **counts, "symmetric": shape.mirror is not None,
         "candidates": [{"class": c, "joints": s.num_joints, **sc.to_dict()}
                        for c, s, sc in zip(classes + sampled, skeletons, scores)],
     }

@@ -89,3 +89,14 @@ def test_learned_method_without_weights_is_a_clear_error(tmp_path: Path, monkeyp
     vertices, faces, _ = quadruped(count=6)
     with pytest.raises(ModelUnavailable):
         predict_skeleton(vertices, faces, method="learned")
+
+
+def test_stacked_joints_merge_into_their_parent_and_keep_their_children() -> None:
+    from simcore.skeleton.learned import without_stacked
+    from simcore.skeleton.types import Skeleton
+
+    chain = Skeleton(np.array([[0, 0, 0], [0, 1, 0], [0, 1, 0], [0, 2, 0], [1, 1, 0.0]]), np.array([-1, 0, 1, 2, 2]),
+                     ["root", "a", "a_twin", "tip", "side"])
+    merged = without_stacked(chain, 0.01)
+    assert merged.names == ["root", "a", "tip", "side"]
+    assert merged.parents.tolist() == [-1, 0, 1, 1]
