@@ -3,8 +3,8 @@
 The model reads `points` surface samples of the mesh (in the token frame, glTF +Y up), then writes candidate
 token sequences under the grammar (never an invalid tree): one greedy sequence per class token (articulation,
 Mixamo, the game-engine humanoid) and the rest sampled. Each candidate is scored without ground truth
-(`simcore.skeleton.candidate_score`) and the best one kept, then placed in the solid (`refined`). The weights file is read once per process; a missing or corrupt file raises
-ModelUnavailable with the path and the reason.
+(`simcore.skeleton.candidate_score`) and the best one kept, then placed in the solid (`refined`). The weights
+file is read once per process; a missing or corrupt file raises ModelUnavailable with the path and the reason.
 """
 
 from __future__ import annotations
