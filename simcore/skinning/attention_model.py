@@ -48,9 +48,10 @@ class SkinAttention(nn.Module):
         self.pair_in = _mlp(PAIR_FEATURES + 2 * w, w, w)
         self.cross = nn.MultiheadAttention(w, config.heads, batch_first=True)
         self.norm = nn.LayerNorm(w)
-        self.out = _mlp(2 * w, w, 1)
-        nn.init.zeros_(self.out[2].weight)
-        nn.init.zeros_(self.out[2].bias)
+        head = nn.Linear(w, 1)  # zero at the start: the logits are the geodesic prior's
+        nn.init.zeros_(head.weight)
+        nn.init.zeros_(head.bias)
+        self.out = nn.Sequential(nn.Linear(2 * w, w), nn.GELU(), head)
         self.prior_scale = nn.Parameter(torch.ones(()))
 
     def bones(self, bone: torch.Tensor) -> torch.Tensor:
