@@ -9,7 +9,9 @@ import trimesh
 from simcore.errors import InvalidInput
 from simcore.metrics.skinning import weight_stats
 from simcore.skeleton.types import Skeleton
+from simcore.skinning import predict
 from simcore.skinning.geodesic import geodesic_distances
+from simcore.skinning.learned import ModelUnavailable
 from simcore.skinning.predict import Method, compute_weights
 from tests.meshes import joined
 
@@ -39,7 +41,7 @@ def _dominant_joint_near_bones(v: np.ndarray, skeleton: Skeleton, weights: np.nd
     assert weights[lower, 0].mean() > 0.8 and weights[upper, 1].mean() > 0.8
 
 
-@pytest.mark.parametrize("method", ["geodesic", "heat", "auto"])
+@pytest.mark.parametrize("method", ["learned", "geodesic", "heat", "auto"])
 def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method: Method) -> None:
     v, f, skeleton = bent_tube
     result = compute_weights(v, f, skeleton, method=method, max_influences=2, smooth_iterations=2)
@@ -50,9 +52,21 @@ def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method
     assert stats["max_influences"] <= 2
     np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-5)
     _dominant_joint_near_bones(v, skeleton, w)
-    expected = {"geodesic", "heat"} if method == "auto" else {method}
+    expected = {"learned"} if method == "auto" else {method}  # the shipped model loads: auto takes it
     assert set(result.scores) == expected and result.method in expected
     assert all(np.isfinite(s["score"]) for s in result.scores.values())
+    assert ("learned model: corpus val L1" in result.reason) == (method == "auto")
+
+
+def test_auto_falls_back_to_the_hand_written_methods_without_the_model(bent_tube, monkeypatch: pytest.MonkeyPatch) -> None:
+    def unavailable() -> str:
+        raise ModelUnavailable("learned skinning weights not found at /nowhere")
+
+    monkeypatch.setattr(predict, "learned_summary", unavailable)
+    v, f, skeleton = bent_tube
+    result = compute_weights(v, f, skeleton, method="auto")
+    assert set(result.scores) == {"geodesic", "heat"} and result.method in {"geodesic", "heat"}
+    assert "not found at /nowhere" in result.reason
 
 
 def test_duplicate_vertices_get_identical_weights(bent_tube) -> None:

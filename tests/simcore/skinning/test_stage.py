@@ -26,9 +26,9 @@ def test_skin_stage_sets_weights_and_reports_scores(tmp_path: Path) -> None:
     assert state.weights is not None and state.weights.shape == (len(vertices), skeleton.num_joints)
     np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
     report = state.report["skinning"]
-    assert report["method"] in {"geodesic", "heat"} and set(report["scores"]) == {"geodesic", "heat"}
+    assert report["method"] == "learned" and set(report["scores"]) == {"learned"} and report["reason"].startswith("learned model")
     assert report["weights"]["unweighted_vertices"] == 0 and report["weights"]["max_influences"] <= 4
-    assert {"omega_orth", "kappa_log", "h_spec", "strain_mean", "score"} <= set(report["scores"]["heat"])
+    assert {"omega_orth", "kappa_log", "h_spec", "strain_mean", "score"} <= set(report["scores"]["learned"])
     assert seen[-1] == pytest.approx(0.6) and seen == sorted(seen)
 
 
