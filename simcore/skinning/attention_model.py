@@ -62,11 +62,19 @@ class SkinAttention(nn.Module):
                prior: torch.Tensor) -> torch.Tensor:
         """(V, K) logits for a chunk of vertices given the bone embeddings of the whole skeleton."""
         p = self.point_in(point)  # (V, w)
-        k = candidates.shape[1]
-        h = self.pair_in(torch.cat([pair, bones[candidates], p[:, None, :].expand(-1, k, -1)], dim=-1))  # (V, K, w)
+        # The first layers read concatenations [pair, bone, point] and [pair, context]: their weights are split so
+        # bone and point terms are computed once per bone and per vertex, not once per pair (same result, ~5x faster).
+        w = self.config.width
+        first = self.pair_in[0]
+        wp, wb, wq = first.weight.split([PAIR_FEATURES, w, w], dim=1)
+        pre = pair @ wp.T + (bones @ wb.T)[candidates] + (p @ wq.T + first.bias)[:, None, :]
+        h = self.pair_in[2](self.pair_in[1](pre))  # (V, K, w)
         context, _ = self.cross(p[:, None, :], h, h, need_weights=False)  # (V, 1, w)
         z = self.norm(h + context)
-        return self.out(torch.cat([z, context.expand(-1, k, -1)], dim=-1))[..., 0] + self.prior_scale * prior
+        top = self.out[0]
+        wz, wc = top.weight.split([w, w], dim=1)
+        hidden = self.out[1](z @ wz.T + (context @ wc.T + top.bias))
+        return self.out[2](hidden)[..., 0] + self.prior_scale * prior
 
     def forward(self, pair: torch.Tensor, bone: torch.Tensor, point: torch.Tensor, candidates: torch.Tensor,
                 prior: torch.Tensor) -> torch.Tensor:
