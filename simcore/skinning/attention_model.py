@@ -68,13 +68,12 @@ class SkinAttention(nn.Module):
         first = self.pair_in[0]
         wp, wb, wq = first.weight.split([PAIR_FEATURES, w, w], dim=1)
         pre = pair @ wp.T + (bones @ wb.T)[candidates] + (p @ wq.T + first.bias)[:, None, :]
-        h = self.pair_in[2](self.pair_in[1](pre))  # (V, K, w)
+        h = self.pair_in[1:](pre)  # (V, K, w)
         context, _ = self.cross(p[:, None, :], h, h, need_weights=False)  # (V, 1, w)
         z = self.norm(h + context)
         top = self.out[0]
         wz, wc = top.weight.split([w, w], dim=1)
-        hidden = self.out[1](z @ wz.T + (context @ wc.T + top.bias))
-        return self.out[2](hidden)[..., 0] + self.prior_scale * prior
+        return self.out[1:](z @ wz.T + (context @ wc.T + top.bias))[..., 0] + self.prior_scale * prior
 
     def forward(self, pair: torch.Tensor, bone: torch.Tensor, point: torch.Tensor, candidates: torch.Tensor,
                 prior: torch.Tensor) -> torch.Tensor:
