@@ -11,6 +11,7 @@ training learns the residual. Softmax over the candidates gives rows that sum to
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import cast
 
 import torch
 from torch import nn
@@ -63,15 +64,15 @@ class SkinAttention(nn.Module):
         """(V, K) logits for a chunk of vertices given the bone embeddings of the whole skeleton."""
         p = self.point_in(point)  # (V, w)
         # The first layers read concatenations [pair, bone, point] and [pair, context]: their weights are split so
-        # bone and point terms are computed once per bone and per vertex, not once per pair (same result, ~5x faster).
+        # bone and point terms are computed once per bone and per vertex, not once per pair (same result, less work).
         w = self.config.width
-        first = self.pair_in[0]
+        first = cast(nn.Linear, self.pair_in[0])
         wp, wb, wq = first.weight.split([PAIR_FEATURES, w, w], dim=1)
         pre = pair @ wp.T + (bones @ wb.T)[candidates] + (p @ wq.T + first.bias)[:, None, :]
         h = self.pair_in[1:](pre)  # (V, K, w)
         context, _ = self.cross(p[:, None, :], h, h, need_weights=False)  # (V, 1, w)
         z = self.norm(h + context)
-        top = self.out[0]
+        top = cast(nn.Linear, self.out[0])
         wz, wc = top.weight.split([w, w], dim=1)
         return self.out[1:](z @ wz.T + (context @ wc.T + top.bias))[..., 0] + self.prior_scale * prior
 
