@@ -20,8 +20,8 @@ FAIL_FACTOR = 1.15  # deviation from rest past the artist envelope that fails a 
 # A float32 row of up to eight weights sums to 1 within eight float32 steps; artists' rigs stay within one.
 ROW_SUM_TOLERANCE = 8 * 2.0 ** -23
 # A vertex refined farther from its LBS position than its limb's radius may have left the limb: a warning only,
-# as a thin part's jiggle can do it too (the fox's Walk: 2.1 radii with edges and volume within the artists');
-# a tear also stretches edges past the artists' envelope, which fails.
+# as a thin part (an ear, a tail tip) can swing that far without harm; a tear also stretches edges past the
+# artists' envelope, which fails.
 TEAR_RADII = 1.0
 
 
@@ -44,7 +44,7 @@ CALIBRATED: dict[str, tuple[Literal["below", "above"], float, bool]] = {
     "volume_low": ("below", 1.0, True),
     "volume_high": ("above", 1.0, True),
     "joints_inside": ("below", 1.0, False),  # a kept studio rig may hold controls outside the body
-    "zero_length_bone_share": ("above", 0.0, False),  # artists leave some (the fox has one)
+    "zero_length_bone_share": ("above", 0.0, False),  # artists' own rigs leave some
 }
 
 

@@ -3,7 +3,7 @@
 Each search (one per joint, or one from all joints at once) may be bounded per voxel: it settles a voxel only
 while its distance there is within that voxel's `bound`. In geodesic binding the bound is a multiple of the
 voxel's distance to its nearest joint, beyond which a joint's weight is negligible, so each joint explores its
-own neighbourhood instead of the whole solid (3–8× fewer voxel visits on the dev rigs).
+own neighbourhood instead of the whole solid.
 
 The searches are Dial's bucketed Dijkstra run on every (search, voxel) pair at once. With buckets one voxel
 pitch wide (the shortest step), no voxel can improve another of its own bucket, so a whole bucket is settled

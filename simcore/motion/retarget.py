@@ -7,7 +7,7 @@ Method (world-space delta transfer):
    its nearest mapped descendants) onto the source's rest bone directions. This is what lets a T-pose
    source drive an A-pose target: at the source's rest, the target takes the source's pose. A branching
    joint (a hip) whose bones no single rotation brings near the source's is placed differently, not posed
-   differently, and keeps its own rest (aligning it folded the fox's waist in every frame).
+   differently, and keeps its own rest (forcing such a joint to align would twist the whole body under it).
 3. Per frame, the source joint's world delta rotation D_s = R_world(t) · R_rest⁻¹ drives the target:
    D_t = D_s · A_j; unmapped target joints ride rigidly with their parent. Target locals follow from
    D_t · R_bind (R_bind = the target's bind orientation, identity for world-aligned skeletons).

@@ -6,8 +6,7 @@ cuts through empty space between the legs or from an arm into the torso. A joint
 voxels its segments cross (at the voxel-centre-to-segment distance) and stops where the joint is too far to
 matter (CUTOFF); vertices then read the distance of the 8 voxel centres around them. Bulky shapes are
 coarsened to MAX_VOXELS.
-A Bellman-Ford sweep along mesh edges after the gathers (surface shortcuts) was measured and dropped: dev-set
-L1 0.5347 without it, 0.5353 with one sweep, and it took 0.17 s of xbot's 0.40 s (28k vertices, 67 joints).
+No relaxation along mesh edges follows the gathers: the voxel paths already follow the surface closely enough.
 """
 
 from __future__ import annotations
@@ -28,12 +27,11 @@ from simcore.skinning.bones import joint_distances, joint_segments
 from simcore.skinning.postprocess import normalize_rows
 
 ALPHA = 0.5  # Dionne & de Lasa falloff mix between 1/d and 1/d² (the paper's and UniRig's value)
-# Measured on the dev rigs (L1 vs artist weights, four issue assets): the plain falloff (sharpness 1) is far
-# softer than artist weights (L1 0.63); its 4th power gives 0.43, 6th 0.39 at 128 voxels (8th: 0.39 again).
-# The d-unit barely matters once sharp.
+# The paper's falloff (sharpness 1) spreads weight far wider than artists do, who bind most of a limb to one bone
+# and blend only near joints; raising it to a power sharpens the blend while keeping its shape.
 SHARPNESS = 6.0
-MAX_VOXELS = 80_000  # occupied voxels; 182k (a winged dragon at 128) took 2.2 s of Dijkstra for 23 joints
-RESOLUTION = 128  # voxels along the longest side: 64 → 96 → 128 gave L1 0.430 → 0.424 → 0.387 (sharpness 6)
+MAX_VOXELS = 80_000  # occupied voxels: bounds the shortest-path searches' time and memory on bulky shapes
+RESOLUTION = 128  # voxels along the longest side: fine enough to keep thin limbs apart
 # Where a joint is over 1.5× as far as a voxel's nearest joint, its weight there is < 1.5^-24 ≈ 6e-5 of the
 # nearest's, under top_k's 1e-4 floor: a joint's search stops at such voxels (+ SLACK_VOXELS, so paths that
 # skirt the bound are kept).

@@ -39,7 +39,7 @@ MAX_JOINTS = 1024
 # 115 bytes per entry), so 100M entries is ~11.5 GB, what one job may take of a 24 GB, 2-worker machine.
 MAX_ENTRIES = 100_000_000
 PROGRESS_POLL_S = 0.25  # how often `auto`'s caller hears the methods' progress (and can cancel)
-SMOOTH_STRENGTH = 0.25  # per pass; 2 passes: dev-set L1 0.474 vs 0.487 unsmoothed (0.5 per pass hurt: artist weights are sharp)
+SMOOTH_STRENGTH = 0.25  # per pass: evens out voxel-grid steps while keeping weights as sharp as artists' are
 
 
 @dataclass
@@ -133,10 +133,8 @@ def compute_weights(
     results: dict[str, sp.csr_matrix] = {}
     scores: dict[str, dict[str, float]] = {}
     tracker = _MethodProgress(chosen)
-    # The methods are independent and spend most of their time in numpy/scipy calls that release the GIL:
-    # on 2 cores `auto` takes 0.79 s instead of 1.15 s for brainstem (34k vertices; median of 5), the same for small meshes.
-    # Cost: both methods' (V, J) arrays live at once; bench/skinning.py (66k vertices, 60 joints) peaks 670-690 MB
-    # instead of 566 MB.
+    # The methods are independent and spend most of their time in numpy/scipy calls that release the GIL, so they
+    # run side by side; the cost is that every method's (V, J) array lives at once.
     with ThreadPoolExecutor(max_workers=max(1, min(len(chosen), usable_cores()))) as pool:
         futures = {pool.submit(run, name, tracker.updater(name)): name for name in chosen}
         pending = set(futures)

@@ -2,9 +2,9 @@
 
 Signals: PhysSkin's conditioning metrics of the weight matrix, vertices left without any weight, and how much
 the surface stretches under the protocol's random test poses (edge strain, recorded for the report).
-`score` = Ω_orth + a penalty per unweighted vertex. Measured on the 18 dev rigs (geodesic vs heat, both
-post-processed alike): the method with the lower Ω_orth had the lower L1 against the artist's weights on
-17 of 18 assets (H_spec: 17, κ_log: 13, mean edge strain: only 4, p95 strain: 2), so strain does not decide.
+`score` = Ω_orth + a penalty per unweighted vertex. Ω_orth (how far the weight columns are from orthogonal,
+i.e. how much bones overlap) tracks agreement with artist weights; edge strain under random poses does not,
+so it is recorded but does not decide.
 """
 
 from __future__ import annotations
