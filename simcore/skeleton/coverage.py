@@ -14,7 +14,8 @@ from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
 
 FAR = 0.4  # × the model's size: a part whose surface is farther than this from every bone is unreached
-# (0.25 flagged the top of robot_expressive's big head, 0.32 from its head bone, which the artist bound rigidly)
+# (well beyond a limb's or head's own reach from its bone: a big, rigidly bound head is still reached, a separate
+# figure or a prop set apart is not)
 MIN_AREA = 0.01  # share of the area: smaller parts (an eye, a button) are not reported
 SPACING = 0.05  # × the model's size: how densely a part's surface is measured (big triangles are not just corners)
 SAMPLES = 4000  # at most this many of those points per part

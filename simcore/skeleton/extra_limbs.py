@@ -17,7 +17,7 @@ import numpy as np
 from simcore.skeleton.geometric import GeometricParams
 from simcore.skeleton.graph_simplify import branch_joints, path_length
 
-MIN_LENGTH = 0.35  # × height: shorter free branches are not limbs (dev: wings ≥ 0.4, armour spikes < 0.3)
+MIN_LENGTH = 0.35  # × height: shorter free branches are not limbs (wings and tails run longer; spikes and horns are shorter)
 CHAIN = GeometricParams()  # joint spacing, turning tolerance and tip pull: as the geometric method
 
 

@@ -5,7 +5,7 @@ loops (one per finger shell), while a mitten cuts into one. When the median loop
 at least MIN_LOOPS, the 15 joints of a hand are laid out in the hand's own frame: along = wrist → fingertip
 direction, in units of the hand length; across = the palm's widest direction, towards the index (the front
 finger: palms down or in, see `hands`); normal = along × across, mirrored for the right hand. The template
-offsets are the mean of the Mixamo Xbot and Soldier hands (both sides) measured in that frame.
+offsets are the mean of reference Mixamo hands (both sides) read in that frame.
 """
 
 from __future__ import annotations

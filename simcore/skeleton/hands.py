@@ -25,7 +25,7 @@ from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import FINGERS
 
-HAND_RESOLUTION = 96  # 64 merges fingers that are a few millimetres apart (Mixamo Soldier); 128 costs 3× the time
+HAND_RESOLUTION = 96  # 64 merges fingers that are only a few millimetres apart; 128 costs 3× the time
 STAND_OUT = 0.6  # a sixth finger-like tip longer than this × the fifth means the "fingers" are surface noise
 MIN_FINGER_RATIO = 0.35  # shortest / longest free finger branch (the thumb's is the shortest on real hands)
 PHALANX = {"Thumb": (0.15, 0.5, 0.8), "Other": (0.0, 0.42, 0.72)}  # fraction of knuckle-branch → tip arc

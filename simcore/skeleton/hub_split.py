@@ -20,8 +20,8 @@ from simcore.skeleton.graph_simplify import Branch
 from simcore.skeleton.mirror import MirrorPlane
 
 LIMB_RADIUS = 0.6  # a limb leaves the trunk where its medial radius drops below this share of the hub's
-# (relative to the hub, not graph_simplify.limb_exit's relative-to-the-limb rule: that one here measured
-# worse, dev auto J2J 0.0332 -> 0.0338, the robot's hub no longer split)
+# (relative to the hub, not graph_simplify.limb_exit's relative-to-the-limb rule: where limbs cross a thick
+# trunk, the trunk's width is the reference for where a limb leaves it)
 MATCH = 0.5  # mirror partners (and on-plane branches) within this × the hub radius
 SAME_JOINT = 0.5  # pairs whose junctions are closer than this × the hub radius along the spine share one
 

@@ -38,8 +38,8 @@ from simcore.skeleton.types import JointKind, Skeleton
 
 UP_ORDER = ("y", "z", "-y", "-z", "x", "-x")  # glTF's +Y first: it wins ties
 CONFIDENT = 0.5
-# A reading with another up than glTF's +Y, when none was given, needs more: read tail-up, the three.js horse
-# passes as a biped at 0.54 (its hind legs as arms); the Z-up bind poses of the dev humanoids score 0.92-1.0.
+# A reading with another up than glTF's +Y, when none was given, needs more: a quadruped read tail-up can pass
+# as a weak biped (its hind legs taken for arms), while a real biped in a Z-up bind pose reads clearly.
 SIDEWAYS_CONFIDENT = 0.8
 RESOLUTION = 112
 SPINE_FRACTIONS = {"Spine": 0.21, "Spine1": 0.435, "Spine2": 0.67}  # of Hips → Neck, Mixamo characters
@@ -52,18 +52,19 @@ LOWER_ARM_FROM = 2.0
 ARM_EXIT = 1.5
 HIPS_ABOVE_CROTCH = 0.01  # × height: Hips sits just above where the leg branches meet
 # An ankle found higher than this × height is the knee's bend (a leg standing straight, in a coat, has no corner
-# at the foot): the ankle goes to this height instead. Dev characters' ankles: 0.04-0.07; 0.12 and 0.15 were
-# measured on the one dev character it fires on (rignet smith, a coat: its artist's ankle is at 0.125).
+# at the foot): the ankle goes to this height instead. Anatomical ankles sit well below this, so the cap only
+# acts when the foot corner is hidden (a long coat or robe) and the found corner is really the knee.
 ANKLE_HIGHEST = 0.12
 # The leg's medial line turns into the foot half a foot's thickness above the floor; the ankle bone is higher.
-# Raising the Foot joint 0.01 / 0.015 / 0.02 × height above that corner: dev humanoid fits J2J 0.0263 → 0.0261 /
-# 0.0260 / 0.0261 (6 of 7 closer to their artist's ankle, Xbot 0.0098 → 0.0104); the knee and toe keep the corner.
+# The Foot joint is raised this × height above that corner, towards the ankle's pivot inside the foot; the knee
+# and toe keep the corner.
 ANKLE_ABOVE_CORNER = 0.015
 FUSED_CROTCH = 0.4  # a leg split below this share of the height means the thighs are fused in the voxels
-NECK_AT, HEAD_AT = 0.17, 0.35  # of shoulder line → head top (mean of Mixamo Xbot and Soldier)
-TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (0.575 on Mixamo's Xbot and Soldier)
+NECK_AT, HEAD_AT = 0.17, 0.35  # of shoulder line → head top (Mixamo characters' proportions)
+TYPICAL_HIPS = 0.55  # then Hips goes at this share of the height (about where a standing figure's pelvis is)
 # Mean distance of the placed body bones from the medial tree, × the mesh's longest side: up to RESIDUAL_OK the
-# template lies along the body (dev humanoids: 0.006-0.014); RESIDUAL_SLACK further on, the check reaches 0.
+# template lies along the body (a well-fitting humanoid stays well inside it); RESIDUAL_SLACK further on, the
+# check reaches 0.
 RESIDUAL_OK, RESIDUAL_SLACK = 0.015, 0.01
 _BODY_PARENT_INDEX = [BODY_JOINTS.index(BODY_PARENTS[n]) if BODY_PARENTS[n] else -1 for n in BODY_JOINTS]
 

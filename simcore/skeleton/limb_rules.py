@@ -53,13 +53,9 @@ def leg_tip(nodes: list[int], adjacency: list[list[int]], pos: np.ndarray, rad: 
     reaches down to the floor and, on a symmetric body, lies off the mirror plane (one of a pair, not a tail or a
     hanging body). Artists give it a hip or shoulder, a knee or elbow, an ankle or wrist and a foot: it gets a
     joint at least every 1 / `leg_segments` of its length, where an even split by `spacing` gives two or three,
-    and its foot joint stays nearer the floor (`leg_tip_pull`). Measured on the dev rigs (auto), four segments
-    against none: the fox 0.0438 → 0.0397, quadruped_a 0.0532 → 0.0462, lizard 0.0308 → 0.0276, others unchanged;
-    3 and 5 segments also better (geometric assets 0.0382 → 0.0376, 0.0372 against 0.0370); steepness 0.75-0.8
-    the same, 0.5-0.7 also take the fish's slanting pectoral fins (0.0384 → 0.0396), 0.85 loses one of
-    quadruped_a's legs. The foot pulled 0.3 instead of 0.7 of the way in (measured with symmetry.TWIN_BARE still
-    at 0.03): fox 0.0381, quadruped_a 0.0452, lizard 0.0263 (geometric assets 0.0370 → 0.0367; 0 and 0.5 give
-    0.0367 and 0.0368), and no 1 cm last bone on the lizard.
+    and its foot joint stays nearer the floor (`leg_tip_pull`), since the foot's pivot is close to the ground
+    and pulling it far in would leave a stub last bone. The steepness test (`leg_upright`) keeps slanting fins and
+    other limbs that do not carry the body off this rule while still taking legs that splay a little.
     """
     end = leaf_end(nodes, adjacency)
     if end is None:
@@ -84,8 +80,7 @@ def head_at_neck(nodes: list[int], interior: list[int], adjacency: list[list[int
     point within `neck_tol` of the thinnest, as a long neck is thin all along), and joints of the neck closer than
     `limb_gap` × spacing to that point go. Its tip then ends the chain as a midline end (`_midline_ends`).
     The first and last tenth of the limb are not read: the junction's ball and the tip's cap.
-    Measured on the dev rigs (auto): quadruped_a 0.0406 → 0.0355 (B2B 0.0271 → 0.0206), the only one it fires on;
-    `head_widen` 1.2-1.6 the same, `neck_tol` 1.0 / 1.2 give 0.0356 / 0.0352.
+    Only limbs with a clear skull beyond a neck are changed; tails, snouts and plain limbs do not widen again.
     """
     end, plane = leaf_end(nodes, adjacency), ground.plane
     if end is None or plane is None or abs(pos[nodes[end], plane.axis] - plane.offset) > rad[nodes[end]]:
@@ -111,8 +106,8 @@ def with_limb_root(nodes: list[int], interior: list[int], adjacency: list[list[i
     shoulder it swings about, as artists and the humanoid fit place it), not at the medial junction deep inside the
     body; it is added only when the limb goes on for at least `spacing` past that point, so short end parts do not
     get a second joint, nor when the junction or a joint is within `limb_gap` × spacing of it (no stub bones).
-    Measured on the dev rigs (auto): J2J 0.0348 → 0.0344 (lizard, penguin, quadruped_a and dragon better, none
-    worse), B2B 0.0176 either way.
+    The joint then sits at the limb's real pivot, so the limb rotates about its socket rather than about a point
+    inside the trunk.
     """
     end = leaf_end(nodes, adjacency)
     if end is None or len(nodes) < 3:

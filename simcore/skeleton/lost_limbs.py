@@ -1,6 +1,6 @@
 """Limbs that 3D thinning erased, found by how far the solid reaches beyond the medial balls, and restored.
 
-Lee thinning can shrink a thick, short protrusion into the body it hangs off (a penguin's head on its round
+Lee thinning can shrink a thick, short protrusion into the body it hangs off (a short head on a round
 body, a stocky animal's head or tail): the part then gets no bone and follows the trunk rigidly. A solid
 voxel's *excess* is its shortest distance through the solid to a medial voxel minus that voxel's radius:
 at most 0 inside the medial balls, growing beyond them. A connected region of positive excess is a lost

@@ -1,7 +1,7 @@
 """Medial skeleton of a voxelised solid: 3D thinning → voxel graph → a spanning forest that keeps thick parts.
 
-Thinning is scikit-image's 3D `skeletonize` (Lee et al. 1994 medial-axis thinning). Measured against a
-distance-transform ridge on the dev assets it gives one-voxel-wide, connected curves with no surface
+Thinning is scikit-image's 3D `skeletonize` (Lee et al. 1994 medial-axis thinning). Unlike a
+distance-transform ridge it gives one-voxel-wide, connected curves with no surface
 sheets, which is what the graph steps need; the Euclidean distance transform supplies each medial voxel's
 radius (local half-thickness), used to judge spurs, junction merges and where loops should be cut.
 """

@@ -6,10 +6,8 @@ occupancy blurred by SECTION_SIGMA voxels) along SECTION_RAYS evenly spread rays
 best fits the middles of the chords they make with their opposite rays. The move is capped at SECTION_LIMIT
 voxels, about half a voxel face's diagonal (0.71): the joint is refined within its voxel, never carried to another
 part of a junction or a bend.
-Measured on the dev rigs (auto), against no move: J2J 0.0260 → 0.0255, B2B 0.0134 → 0.0128 (closer on 14 of the
-16 assets it moves; the fox, whose artist's spine runs along its back, 0.0230 → 0.0239, the bat 0.0126 → 0.0129),
-humanoids 0.0240 / 0.0118 → 0.0235 / 0.0112, joints inside the mesh 0.976 → 0.994. Capped at 0.5 / 1.0 / 1.5
-voxels instead: B2B 0.0129 / 0.0128 / 0.0130; moved half way to the centre (a damped step): 0.0129.
+Centring brings bones onto their limb's axis and keeps joints inside thin parts of the mesh; a rig whose artist
+ran a bone off-centre on purpose (a spine along the back) can end up a little further from it.
 """
 
 from __future__ import annotations

@@ -30,8 +30,8 @@ LOPSIDED_JOINTS = 2  # a twinless branch this long (joints) is dropped when its 
 LOPSIDED_INSIDE = 0.8  # ...for at least this share of its joints...
 LOPSIDED_BARE = 0.03  # ...and no joint lies within this × size of that image (no bones there on the other side)
 # A lone twinless joint's mirror image is added when no joint lies within this × size of it (two voxels of the
-# geometric method's 96): 0.03 left the fox's hind feet one joint apart once its feet were pulled in less; 0.02,
-# 0.015 and 0.01 all gave the geometric dev assets 0.0364 against 0.0367.
+# geometric method's 96): close enough that a mirror-side joint a voxel or so off counts as the twin, and far
+# enough below the spacing of a limb's joints that a missing twin (a foot pulled in less) is still restored.
 TWIN_BARE = 0.02
 
 
@@ -59,8 +59,8 @@ def mirror_report(twins: MirrorTwins | None, dropped: int = 0, added: int = 0, e
 
 def body_mirror(vertices: np.ndarray) -> MirrorPlane | None:
     """The mesh's mirror plane when it is mirror-symmetric (its mirrored vertices lie within SYMMETRIC_MESH × size
-    of its vertices, on average), else None. A pose breaks it: the three.js horse mid-gallop is at 0.021, the dev
-    rigs' rest poses at 0.000-0.006."""
+    of its vertices, on average), else None. A pose breaks it: a character mid-stride is clearly asymmetric,
+    while a rest or bind pose mirrors almost exactly."""
     v = np.asarray(vertices, dtype=np.float64)
     plane, spread = best_mirror(v)
     return plane if spread <= SYMMETRIC_MESH * float(np.ptp(v, axis=0).max()) else None
