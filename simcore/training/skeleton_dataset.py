@@ -1,6 +1,6 @@
 """`rigforge train skeleton-data`: the learned skeleton model's samples, cached as .npz.
 
-Same characters and augmentations as the skinning model's data (`skin_dataset.corpus_characters`,
+Same characters and augmentations as the skinning model's data (`characters.corpus_characters`,
 `anny_bodies`, `skin_samples.variants`): corpus `train` (re-posed by its clips and random poses, subdivided),
 corpus `val` as it comes (bind pose), anny bodies (train only). The skeleton model keeps the upload's facing,
 so variants are turned by at most ±`turn_degrees` about up instead of a full turn (scale does not matter: the
@@ -15,22 +15,20 @@ Deterministic by seed: character i of a source draws from default_rng([seed, sou
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from functools import partial
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from simcore.errors import SimcoreError
 from simcore.io.gltf_rig import used_joints
 from simcore.metrics.skeleton import used_skeleton
 from simcore.skeleton.shape_points import shape_points
 from simcore.skeleton.tokenizer import SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
-from simcore.training.skin_dataset import corpus_characters
+from simcore.training.characters import Make, character_jobs
+from simcore.training.sample_cache import fill_cache
 from simcore.training.skin_samples import Character, normalised, variants
 
 GAME_ENGINE_PREFIX = "anny_game_engine"  # anny_bodies names each body after its rig
@@ -100,57 +98,19 @@ def make_skeleton_sample(character: Character, rng: np.random.Generator, points:
     return SkeletonSample(cloud, tokens, joints, character.category)
 
 
-def _save(path: Path, sample: SkeletonSample) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **sample.arrays())  # type: ignore[arg-type]  # numpy's stub: ** could fill allow_pickle (bool)
-    tmp.replace(path)
-
-
 def build_skeleton_data(config: SkeletonDataConfig, out: Path, report: Callable[[str, int, int], None]) -> dict:
     """Write out/train/*.npz and out/val/*.npz; report(name, done, total) after each character. Returns counts."""
-    from simcore.training.anny_bodies import anny_bodies
-
     tokenizer = SkeletonTokenizer(max_length=config.max_tokens)
-    root = Path(config.corpus)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "data_config.json").write_text(json.dumps(asdict(config), indent=2))
     skipped: dict[str, str] = {}
-    counts = {"train": 0, "val": 0, "failed": 0}
-    train = list(corpus_characters(root, "train", skipped))
-    val = list(corpus_characters(root, "val", skipped))
-    total = len(train) + len(val) + config.anny_bodies
-    done = 0
 
-    def emit(split: str, name: str, make: Callable[[], list[Character]], rng: np.random.Generator) -> None:
-        nonlocal done
-        if not (out / split / f"{name}_00.npz").exists():
-            try:
-                for k, c in enumerate(make()):
-                    _save(out / split / f"{name}_{k:02d}.npz", make_skeleton_sample(c, rng, config.points, tokenizer))
-            except (SimcoreError, ValueError, np.linalg.LinAlgError) as exc:  # one bad character is skipped, not fatal
-                skipped[name] = f"{type(exc).__name__}: {exc}"[:200]
-                counts["failed"] += 1
-        counts[split] += sum(1 for _ in out.glob(f"{split}/{name}_*.npz"))
-        done += 1
-        report(name, done, total)
+    def samples(characters: list[Character], rng: np.random.Generator) -> list[dict[str, np.ndarray]]:
+        return [make_skeleton_sample(c, rng, config.points, tokenizer).arrays() for c in characters]
 
-    def augmented(c: Character, rng: np.random.Generator, count: int) -> list[Character]:
-        return [upright_turned(v, rng, config.turn_degrees) for v in variants(c, rng, count, config.pose_degrees, turn=False)]
+    def augmented(count: int) -> Make:
+        return lambda c, rng: samples([upright_turned(v, rng, config.turn_degrees)
+                                       for v in variants(c, rng, count, config.pose_degrees, turn=False)], rng)
 
-    def at_rest(c: Character) -> list[Character]:
-        return [normalised(c)]
-
-    for i, c in enumerate(train):
-        rng = np.random.default_rng([config.seed, 0, i])
-        emit("train", c.name, partial(augmented, c, rng, config.variants), rng)
-    for i, c in enumerate(val):
-        rng = np.random.default_rng([config.seed, 1, i])
-        emit("val", c.name, partial(at_rest, c), rng)
-    bodies = anny_bodies(config.anny_bodies, np.random.default_rng([config.seed, 2])) if config.anny_bodies else iter(())
-    for i, c in enumerate(bodies):
-        rng = np.random.default_rng([config.seed, 3, i])
-        emit("train", c.name, partial(augmented, c, rng, config.anny_variants), rng)
-    summary = {**counts, "skipped": skipped}
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    return summary
+    jobs, total = character_jobs(Path(config.corpus), config.seed, config.anny_bodies, skipped,
+                                 train=augmented(config.variants), val=lambda c, rng: samples([normalised(c)], rng),
+                                 body=augmented(config.anny_variants))
+    return fill_cache(out, asdict(config), jobs, total, skipped, report)

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 import torch
 
 from simcore.geometry.capsule_creatures import quadruped
@@ -17,29 +16,25 @@ from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 from simcore.skinning.learned import ModelUnavailable
-from simcore.training.skeleton_dataset import _save, make_skeleton_sample, upright_turned
+from simcore.training.sample_cache import save_sample
+from simcore.training.skeleton_dataset import make_skeleton_sample, upright_turned
 from simcore.training.skeleton_train import SkeletonTrainConfig, train_skeleton
-from simcore.training.skin_samples import Character, normalised, variants
+from simcore.training.skin_samples import normalised, variants
+from tests.simcore.training.creatures import capsule_dog
 
 TINY = SkeletonModelConfig(width=32, heads=2, encoder_layers=1, decoder_layers=2, queries=32, max_tokens=128, frequencies=4)
 
 
-def _creature() -> Character:
-    """The capsule dog, each capsule bound to the joint its bone starts at."""
-    vertices, faces, skeleton = quadruped(count=8)
-    per = len(vertices) // len(skeleton.bones())
-    owner = np.repeat(skeleton.bones()[:, 0], per)
-    weights = sp.csr_matrix((np.ones(len(vertices)), (np.arange(len(vertices)), owner)), shape=(len(vertices), skeleton.num_joints))
-    return Character("dog", "quadruped", vertices, faces, skeleton, weights)
 
 
 def test_tiny_model_lowers_its_loss_and_ships_a_loadable_file(tmp_path: Path) -> None:
-    creature = _creature()
+    creature = capsule_dog()
     rng = np.random.default_rng(0)
     tokenizer = SkeletonTokenizer(max_length=TINY.max_tokens)
     for k, c in enumerate(variants(creature, rng, 3, 20.0, turn=False)):
-        _save(tmp_path / "data" / "train" / f"dog_{k}.npz", make_skeleton_sample(upright_turned(c, rng, 20.0), rng, 512, tokenizer))
-    _save(tmp_path / "data" / "val" / "dog.npz", make_skeleton_sample(normalised(creature), rng, 512, tokenizer))
+        save_sample(tmp_path / "data" / "train" / f"dog_{k}.npz",
+                    make_skeleton_sample(upright_turned(c, rng, 20.0), rng, 512, tokenizer).arrays())
+    save_sample(tmp_path / "data" / "val" / "dog.npz", make_skeleton_sample(normalised(creature), rng, 512, tokenizer).arrays())
     config = SkeletonTrainConfig(steps=60, batch=3, points=256, lr=3e-3, val_every=30, decode_every=60, decode_val=1,
                                  log_every=10, threads=1, model=TINY)
     out = tmp_path / "skeleton.safetensors"

@@ -6,31 +6,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
-from simcore.geometry.capsule_creatures import quadruped
 from simcore.skinning.attention_model import ModelConfig
 from simcore.skinning.learned import ModelUnavailable, learned_weights, load_model
-from simcore.training.skin_dataset import _write
-from simcore.training.skin_samples import Character, make_sample, variants
+from simcore.training.sample_cache import save_sample
+from simcore.training.skin_samples import make_sample, variants
 from simcore.training.skin_train import TrainConfig, train_skin
-
-
-def _creature() -> Character:
-    """The capsule dog, each capsule bound to the joint its bone starts at (what the artist of such a toy would do)."""
-    vertices, faces, skeleton = quadruped(count=8)
-    per = len(vertices) // len(skeleton.bones())
-    owner = np.repeat(skeleton.bones()[:, 0], per)
-    weights = sp.csr_matrix((np.ones(len(vertices)), (np.arange(len(vertices)), owner)), shape=(len(vertices), skeleton.num_joints))
-    return Character("dog", "quadruped", vertices, faces, skeleton, weights)
+from tests.simcore.training.creatures import capsule_dog
 
 
 def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path) -> None:
-    creature = _creature()
+    creature = capsule_dog()
     rng = np.random.default_rng(0)
     for k, c in enumerate(variants(creature, rng, 3, 30.0)):
-        _write(tmp_path / "data" / "train" / f"dog_{k}.npz", make_sample(c, rng, 600))
-    _write(tmp_path / "data" / "val" / "dog.npz", make_sample(creature, rng, 600))
+        save_sample(tmp_path / "data" / "train" / f"dog_{k}.npz", make_sample(c, rng, 600).arrays())
+    save_sample(tmp_path / "data" / "val" / "dog.npz", make_sample(creature, rng, 600).arrays())
     config = TrainConfig(steps=40, batch=2, points=256, lr=5e-3, val_every=20, log_every=10, model=ModelConfig(width=16, heads=2, bone_layers=1))
     out = tmp_path / "model.safetensors"
     summary = train_skin(config, tmp_path / "data", out, tmp_path / "log.jsonl", lambda step, total, entry: None)
