@@ -9,6 +9,7 @@ TrainConfig for the skinning model, SkeletonDataConfig and SkeletonTrainConfig f
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
@@ -28,41 +29,59 @@ def _read(config: Path) -> dict:
     return json.loads(config.read_text(encoding="utf-8"))
 
 
-@app.command("data")
-def data(config: ConfigOption = DEFAULT_CONFIG) -> None:
-    """Build (or complete) the sample cache: corpus train/val characters, augmented, and anny bodies."""
-    from simcore.training.skin_dataset import DataConfig, build_skin_data  # torch and anny load only for training
-
+def _build(config: Path, build: Callable[..., dict], data_config: Callable[..., object]) -> None:
+    """Run a sample builder on the config's "data" section into its "cache", with a progress bar."""
     spec = _read(config)
     with count_bar("samples") as update:
-        summary = build_skin_data(DataConfig(**spec.get("data", {})), Path(spec["cache"]), lambda name, done, total: update(name, done, total))
+        summary = build(data_config(**spec.get("data", {})), Path(spec["cache"]), lambda name, done, total: update(name, done, total))
     Console().print(f"train samples {summary['train']}, val samples {summary['val']}, failed characters {summary['failed']}")
     for name, why in summary["skipped"].items():
         Console().print(f"[yellow]skipped[/] {name}: {why}")
 
 
+def _train(config: Path, data_command: str, train_command: str, model_config: Callable[..., object],
+           train_config: Callable[..., object], train: Callable[..., dict], write_card: Callable[..., Path], score: str) -> dict:
+    """Train on the config's cache, write the weights and their card; `score` is the val figure the bar shows."""
+    spec = _read(config)
+    section = dict(spec.get("train", {}))
+    section["model"] = model_config(**section.get("model", {}))
+    log = Path(spec["log"])
+    log.parent.mkdir(parents=True, exist_ok=True)
+
+    def describe(entry: dict) -> str:
+        parts = [f"loss {entry['loss']:.4f}"] if "loss" in entry else []
+        if "val" in entry:
+            parts.append(f"val {score} {entry['val'][score.lower()]:.4f}")
+        return ", ".join(parts)
+
+    with count_bar("training") as update:
+        summary = train(train_config(**section), Path(spec["cache"]), Path(spec["out"]), log,
+                        lambda step, total, entry: update(describe(entry), step, total))
+    cache = Path(spec["cache"])
+    card = write_card(Path(spec["out"]), summary, _read(cache / "summary.json"), _read(cache / "data_config.json"),
+                      f"rigforge train {data_command} --config {config} && rigforge train {train_command} --config {config}")
+    Console().print(f"model card: {card}")
+    return summary
+
+
+@app.command("data")
+def data(config: ConfigOption = DEFAULT_CONFIG) -> None:
+    """Build (or complete) the sample cache: corpus train/val characters, augmented, and anny bodies."""
+    from simcore.training.skin_dataset import DataConfig, build_skin_data  # torch and anny load only for training
+
+    _build(config, build_skin_data, DataConfig)
+
+
 @app.command("skin")
 def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
-    """Train the skinning model on the cache, keep the best `val` state, write the .safetensors."""
+    """Train the skinning model on the cache, keep the best `val` state, write the .safetensors and its card."""
     from simcore.skinning.attention_model import ModelConfig
     from simcore.training.model_card import write_model_card
     from simcore.training.skin_train import TrainConfig, train_skin
 
-    spec = _read(config)
-    section = dict(spec.get("train", {}))
-    section["model"] = ModelConfig(**section.get("model", {}))
-    train_config = TrainConfig(**section)
-    log = Path(spec["log"])
-    log.parent.mkdir(parents=True, exist_ok=True)
-    with count_bar("training") as update:
-        summary = train_skin(train_config, Path(spec["cache"]), Path(spec["out"]), log,
-                             lambda step, total, entry: update(_describe(entry), step, total))
-    cache = Path(spec["cache"])
-    card = write_model_card(Path(spec["out"]), summary, _read(cache / "summary.json"), _read(cache / "data_config.json"),
-                            f"rigforge train data --config {config} && rigforge train skin --config {config}")
-    Console().print(f"model card: {card}")
+    summary = _train(config, "data", "skin", ModelConfig, TrainConfig, train_skin, write_model_card, "L1")
     Console().print(f"best val L1 {summary['val']['l1']:.4f}, deformation {summary['val']['deform']:.5f} at step "
-                    f"{summary['best_step']} (start {summary['val_at_start']['l1']:.4f}); {summary['seconds']:.0f} s → {spec['out']}")
+                    f"{summary['best_step']} (start {summary['val_at_start']['l1']:.4f}); {summary['seconds']:.0f} s")
 
 
 @app.command("skeleton-data")
@@ -70,13 +89,7 @@ def skeleton_data(config: ConfigOption = SKELETON_CONFIG) -> None:
     """Build (or complete) the skeleton model's sample cache: points, class and tokens of each augmented character."""
     from simcore.training.skeleton_dataset import SkeletonDataConfig, build_skeleton_data
 
-    spec = _read(config)
-    with count_bar("samples") as update:
-        summary = build_skeleton_data(SkeletonDataConfig(**spec.get("data", {})), Path(spec["cache"]),
-                                      lambda name, done, total: update(name, done, total))
-    Console().print(f"train samples {summary['train']}, val samples {summary['val']}, failed characters {summary['failed']}")
-    for name, why in summary["skipped"].items():
-        Console().print(f"[yellow]skipped[/] {name}: {why}")
+    _build(config, build_skeleton_data, SkeletonDataConfig)
 
 
 @app.command("skeleton")
@@ -86,31 +99,7 @@ def skeleton(config: ConfigOption = SKELETON_CONFIG) -> None:
     from simcore.training.skeleton_card import write_skeleton_card
     from simcore.training.skeleton_train import SkeletonTrainConfig, train_skeleton
 
-    spec = _read(config)
-    section = dict(spec.get("train", {}))
-    section["model"] = SkeletonModelConfig(**section.get("model", {}))
-    log = Path(spec["log"])
-    log.parent.mkdir(parents=True, exist_ok=True)
-    with count_bar("training") as update:
-        summary = train_skeleton(SkeletonTrainConfig(**section), Path(spec["cache"]), Path(spec["out"]), log,
-                                 lambda step, total, entry: update(_describe_skeleton(entry), step, total))
-    cache = Path(spec["cache"])
-    card = write_skeleton_card(Path(spec["out"]), summary, _read(cache / "summary.json"), _read(cache / "data_config.json"),
-                               f"rigforge train skeleton-data --config {config} && rigforge train skeleton --config {config}")
-    Console().print(f"model card: {card}")
+    summary = _train(config, "skeleton-data", "skeleton", SkeletonModelConfig, SkeletonTrainConfig, train_skeleton,
+                     write_skeleton_card, "NLL")
     Console().print(f"best val NLL {summary['val']['nll']:.4f} (start {summary['val_at_start']['nll']:.4f}), decoded J2J "
-                    f"{summary['val']['j2j']:.4f} at step {summary['best_step']}; {summary['seconds']:.0f} s → {spec['out']}")
-
-
-def _describe_skeleton(entry: dict) -> str:
-    parts = [f"loss {entry['loss']:.4f}"] if "loss" in entry else []
-    if "val" in entry:
-        parts.append(f"val NLL {entry['val']['nll']:.4f}")
-    return ", ".join(parts)
-
-
-def _describe(entry: dict) -> str:
-    parts = [f"loss {entry['loss']:.4f}"] if "loss" in entry else []
-    if "val" in entry:
-        parts.append(f"val L1 {entry['val']['l1']:.4f}")
-    return ", ".join(parts)
+                    f"{summary['val']['j2j']:.4f} at step {summary['best_step']}; {summary['seconds']:.0f} s")

