@@ -9,16 +9,14 @@ file is read once per process; a missing or corrupt file raises ModelUnavailable
 
 from __future__ import annotations
 
-import json
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import torch
-from safetensors import SafetensorError, safe_open
-from safetensors.torch import load_file, save_file
 
 from simcore.geometry.voxelize import solid_voxels
+from simcore.model_weights import load_weights, read_metadata
 from simcore.skeleton.candidate_score import ShapeContext, score_candidate
 from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.inside import snap_inside
@@ -29,7 +27,6 @@ from simcore.skeleton.symmetry import body_mirror, mirror_twins, symmetrize
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
-from simcore.skinning.learned import ModelUnavailable
 
 WEIGHTS = Path(__file__).parent / "weights" / "skeleton_tokens.safetensors"
 GREEDY_CLASSES = ("articulation", "mixamo", "vroid")
@@ -39,40 +36,10 @@ SECTION_LIMIT = 6.0  # voxels of the 128 solid
 SOLID_RESOLUTION = 128  # joints outside are snapped to this solid: 64 left half of them outside a 128-voxel one
 
 
-def save_skeleton_model(model: SkeletonTokenModel, path: Path, summary: dict) -> None:
-    """Write the state dict as safetensors with the network sizes and `summary` (training and val figures) as
-    JSON metadata; summary["config"]["points"] is the point count inference uses."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    state = {k: v.detach().contiguous() for k, v in model.state_dict().items()}
-    save_file(state, str(path), metadata={"model": json.dumps(model.config.to_dict()), "summary": json.dumps(summary)})
-
-
-@lru_cache(maxsize=4)
-def read_skeleton_metadata(path: Path = WEIGHTS) -> dict[str, dict]:
-    """The file's JSON metadata: "model" (network sizes) and "summary"."""
-    if not path.is_file():
-        raise ModelUnavailable(f"learned skeleton weights not found at {path}", field="skeleton")
-    try:
-        with safe_open(str(path), framework="pt") as fh:
-            meta = fh.metadata() or {}
-        return {key: json.loads(meta[key]) for key in ("model", "summary")}
-    except (SafetensorError, OSError, KeyError, ValueError) as exc:
-        raise ModelUnavailable(f"learned skeleton weights at {path} are unreadable: {type(exc).__name__}: {exc}"[:300],
-                               field="skeleton") from exc
-
-
 @lru_cache(maxsize=4)
 def load_skeleton_model(path: Path = WEIGHTS) -> SkeletonTokenModel:
     """The model stored at `path`, in eval mode (cached per process)."""
-    sizes = read_skeleton_metadata(path)["model"]
-    try:
-        model = SkeletonTokenModel(SkeletonModelConfig(**sizes))
-        model.load_state_dict(load_file(str(path)))
-    except (SafetensorError, OSError, RuntimeError, TypeError) as exc:
-        raise ModelUnavailable(f"learned skeleton weights at {path} do not fit the model: {type(exc).__name__}: {exc}"[:300],
-                               field="skeleton") from exc
-    model.eval()
-    return model
+    return load_weights(path, "skeleton", "skeleton", lambda sizes: SkeletonTokenModel(SkeletonModelConfig(**sizes)))
 
 
 def without_stacked(skeleton: Skeleton, shortest: float) -> Skeleton:
@@ -115,7 +82,7 @@ def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int
     model_path: the weights file (None = the shipped WEIGHTS)."""
     model_path = WEIGHTS if model_path is None else model_path
     model = load_skeleton_model(model_path)
-    points = int(read_skeleton_metadata(model_path)["summary"]["config"]["points"])
+    points = int(read_metadata(model_path, "skeleton", "skeleton")["summary"]["config"]["points"])
     rng = np.random.default_rng(seed)
     cloud, norm = shape_points(vertices, faces, points, rng)
     grammar = SkeletonGrammar(max_length=model.config.max_tokens, max_joints=max_joints)

@@ -22,8 +22,8 @@ import torch
 from torch.nn import functional as F
 
 from simcore.metrics.skeleton import chamfer
+from simcore.model_weights import save_weights
 from simcore.skeleton.grammar import SkeletonGrammar
-from simcore.skeleton.learned import save_skeleton_model
 from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel, sequence_slots
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
@@ -195,7 +195,7 @@ def train_skeleton(config: SkeletonTrainConfig, data: Path, out: Path, log: Path
         best["j2j"] = val_j2j(model, val, config.points, config.decode_val)
     summary = {"best_step": best_step, "val": best, "val_at_start": start_val, "seconds": round(time.perf_counter() - started, 1),
                "train_samples": len(train), "val_samples": len(val), "categories": counts, "config": asdict(config)}
-    save_skeleton_model(model, out, summary)
+    save_weights(model, out, summary)
     with log.open("a", encoding="utf-8") as fh:
         fh.write(json.dumps({"event": "end", **summary}) + "\n")
     return summary

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from simcore.model_weights import save_weights
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
-from simcore.skinning.learned import save_model
 from simcore.training.skin_samples import SkinSample
 
 
@@ -147,7 +147,7 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
     model.load_state_dict(best_state)
     summary = {"best_step": best_step, "val": best, "val_at_start": history[0]["val"], "seconds": round(time.perf_counter() - started, 1),
                "train_samples": len(train), "val_samples": len(val), "categories": counts, "config": asdict(config)}
-    save_model(model, out, summary)
+    save_weights(model, out, summary)
     with log.open("a", encoding="utf-8") as fh:
         fh.write(json.dumps({"event": "end", **summary}) + "\n")
     return summary

@@ -8,10 +8,10 @@ import trimesh
 
 from simcore.errors import InvalidInput
 from simcore.metrics.skinning import weight_stats
+from simcore.model_weights import ModelUnavailable
 from simcore.skeleton.types import Skeleton
 from simcore.skinning import predict
 from simcore.skinning.geodesic import geodesic_distances
-from simcore.skinning.learned import ModelUnavailable
 from simcore.skinning.predict import Method, compute_weights
 from tests.meshes import joined
 

@@ -9,13 +9,13 @@ import pytest
 import torch
 
 from simcore.geometry.capsule_creatures import quadruped
+from simcore.model_weights import ModelUnavailable
 from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.learned import learned_skeleton, load_skeleton_model
 from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel, sequence_slots
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
-from simcore.skinning.learned import ModelUnavailable
 from simcore.training.sample_cache import save_sample
 from simcore.training.skeleton_dataset import make_skeleton_sample, upright_turned
 from simcore.training.skeleton_train import SkeletonTrainConfig, train_skeleton

@@ -7,8 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from simcore.model_weights import ModelUnavailable
 from simcore.skinning.attention_model import ModelConfig
-from simcore.skinning.learned import ModelUnavailable, learned_weights, load_model
+from simcore.skinning.learned import learned_weights, load_model
 from simcore.training.sample_cache import save_sample
 from simcore.training.skin_samples import make_sample, variants
 from simcore.training.skin_train import TrainConfig, train_skin

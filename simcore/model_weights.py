@@ -1,0 +1,67 @@
+"""Trained weights shipped in the repo: safetensors state dicts whose metadata carries the network sizes ("model")
+and the training summary ("summary"). Read without pickle; any unreadable file is a ModelUnavailable naming it."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Protocol, TypeVar
+
+import torch
+from safetensors import SafetensorError, safe_open
+from safetensors.torch import load_file, save_file
+
+from simcore.errors import SimcoreError
+
+
+class ModelUnavailable(SimcoreError):
+    """A learned model's weights cannot be read (`field`: the stage whose model it is)."""
+
+    def __init__(self, message: str, field: str = "skinning"):
+        super().__init__(message, code="model_unavailable", field=field)
+
+
+class Configured(Protocol):
+    """A torch module with a dataclass-like `config` that can be written as JSON."""
+
+    config: Any
+
+    def state_dict(self) -> dict[str, torch.Tensor]: ...
+
+
+M = TypeVar("M", bound=torch.nn.Module)
+
+
+def save_weights(model: Configured, path: Path, summary: dict) -> None:
+    """Write the state dict as safetensors with the network sizes and `summary` as JSON metadata."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    state = {k: v.detach().contiguous() for k, v in model.state_dict().items()}
+    save_file(state, str(path), metadata={"model": json.dumps(model.config.to_dict()), "summary": json.dumps(summary)})
+
+
+@lru_cache(maxsize=8)
+def read_metadata(path: Path, what: str, field: str) -> dict[str, dict]:
+    """The file's JSON metadata {"model": sizes, "summary": training figures}; `what` names the model in errors."""
+    if not path.is_file():
+        raise ModelUnavailable(f"learned {what} weights not found at {path}", field=field)
+    try:
+        with safe_open(str(path), framework="pt") as fh:
+            meta = fh.metadata() or {}
+        return {key: json.loads(meta[key]) for key in ("model", "summary")}
+    except (SafetensorError, OSError, KeyError, ValueError) as exc:
+        raise ModelUnavailable(f"learned {what} weights at {path} are unreadable: {type(exc).__name__}: {exc}"[:300],
+                               field=field) from exc
+
+
+def load_weights(path: Path, what: str, field: str, build: Callable[[dict], M]) -> M:
+    """The model `build(sizes)` with the file's state loaded, in eval mode."""
+    sizes = read_metadata(path, what, field)["model"]
+    try:
+        model = build(sizes)
+        model.load_state_dict(load_file(str(path)))
+    except (SafetensorError, OSError, RuntimeError, TypeError) as exc:
+        raise ModelUnavailable(f"learned {what} weights at {path} do not fit the model: {type(exc).__name__}: {exc}"[:300],
+                               field=field) from exc
+    return model.eval()
