@@ -5,24 +5,13 @@ from __future__ import annotations
 import base64
 import json
 import os
-import struct
 import tempfile
 
 import numpy as np
 import pytest
 
 from tests.api.conftest import INGEST_ONLY
-
-
-def glb(doc: dict, binary: bytes = b"", declared_total: int | None = None) -> bytes:
-    body = json.dumps(doc).encode()
-    body += b" " * (-len(body) % 4)
-    chunks = struct.pack("<I4s", len(body), b"JSON") + body
-    if binary:
-        binary += b"\0" * (-len(binary) % 4)
-        chunks += struct.pack("<I4s", len(binary), b"BIN\0") + binary
-    total = 12 + len(chunks)
-    return struct.pack("<4sII", b"glTF", 2, declared_total or total) + chunks
+from tests.hostile.gltf_cases import glb
 
 
 def triangle_gltf(positions: np.ndarray, buffer_length: int | None = None, uri: str | None = None) -> dict:

@@ -16,15 +16,16 @@ BAD_GLTF = ("invalid_gltf",)
 TRI = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
 
 
-def glb(doc: dict, binary: bytes = b"") -> bytes:
-    """A GLB container around `doc` (JSON chunk) and `binary` (BIN chunk), both padded to 4 bytes."""
+def glb(doc: dict, binary: bytes = b"", declared_total: int | None = None) -> bytes:
+    """A GLB container around `doc` (JSON chunk) and `binary` (BIN chunk), both padded to 4 bytes; `declared_total`
+    overrides the header's length (a lying header)."""
     body = json.dumps(doc).encode()
     body += b" " * (-len(body) % 4)
     chunks = struct.pack("<I4s", len(body), b"JSON") + body
     if binary:
         binary += b"\0" * (-len(binary) % 4)
         chunks += struct.pack("<I4s", len(binary), b"BIN\0") + binary
-    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
+    return struct.pack("<4sII", b"glTF", 2, declared_total or 12 + len(chunks)) + chunks
 
 
 def embedded(doc: dict, binary: bytes) -> bytes:

@@ -8,6 +8,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from tests.hostile.case import OK, Case, case
+from tests.simcore.motion.motion_samples import SMALL_BVH as BVH_OK
 
 UNREADABLE = ("unreadable_mesh", "empty_mesh", "index_out_of_range", "non_finite", "unknown_format")
 OBJ_TRI = "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
@@ -96,27 +97,6 @@ def stl_cases() -> Iterator[Case]:
     yield case("stl-ascii-no-end", "mesh", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", *UNREADABLE)
 
 
-BVH_OK = """HIERARCHY
-ROOT Hips
-{
-  OFFSET 0 0 0
-  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
-  JOINT Spine
-  {
-    OFFSET 0 10 0
-    CHANNELS 3 Zrotation Xrotation Yrotation
-    End Site
-    {
-      OFFSET 0 10 0
-    }
-  }
-}
-MOTION
-Frames: 2
-Frame Time: 0.0333
-0 90 0 0 0 0 0 0 0
-0 91 0 0 5 0 0 5 0
-"""
 
 
 def _deep_bvh(depth: int) -> str:
@@ -129,14 +109,14 @@ def bvh_cases() -> Iterator[Case]:
     yield case("bvh-valid", "motion", BVH_OK, OK)
     bad = ("invalid_bvh", "too_many_frames", "too_many_joints", "file_too_large")
     edits = [("Frames: 2", "Frames: 3"), ("Frames: 2", "Frames: -2"), ("Frames: 2", "Frames: 0"), ("Frames: 2", "Frames: 1e12"),
-             ("Frames: 2", "Frames: x"), ("Frame Time: 0.0333", "Frame Time: 0"), ("Frame Time: 0.0333", "Frame Time: nan"),
-             ("Frame Time: 0.0333", "Frame Time: -1"), ("CHANNELS 3", "CHANNELS 7"), ("CHANNELS 3", "CHANNELS -1"),
+             ("Frames: 2", "Frames: x"), ("Frame Time: 0.033333", "Frame Time: 0"), ("Frame Time: 0.033333", "Frame Time: nan"),
+             ("Frame Time: 0.033333", "Frame Time: -1"), ("CHANNELS 3", "CHANNELS 7"), ("CHANNELS 3", "CHANNELS -1"),
              ("Zrotation Xrotation Yrotation\n    End", "Zrotation Xrotation Wrotation\n    End"),
              ("Zrotation Xrotation Yrotation\n    End", "Zrotation Zrotation Yrotation\n    End"),
              ("JOINT Spine", "JOINT Hips"), ("JOINT Spine", "JOINT"), ("OFFSET 0 10 0\n    CHANNELS", "OFFSET 0 nan 0\n    CHANNELS"),
              ("OFFSET 0 10 0\n    CHANNELS", "OFFSET 0 10\n    CHANNELS"), ("MOTION\n", ""), ("HIERARCHY\nROOT", "HIERARCHY\nJOINT"),
-             ("0 91 0 0 5 0 0 5 0", "0 91 0 0 5 0 0 5"), ("0 91 0 0 5 0 0 5 0", "0 91 0 0 5 0 0 5 x"),
-             ("0 91 0 0 5 0 0 5 0", "0 91 0 0 5 0 0 5 inf"), ("0 91 0 0 5 0 0 5 0", "0 91 0 0 5 0 0 5 0 0 0"),
+             ("1 90 0 10 20 30 40 50 60", "1 90 0 10 20 30 40 50"), ("1 90 0 10 20 30 40 50 60", "1 90 0 10 20 30 40 50 x"),
+             ("1 90 0 10 20 30 40 50 60", "1 90 0 10 20 30 40 50 inf"), ("1 90 0 10 20 30 40 50 60", "1 90 0 10 20 30 40 50 60 0 0"),
              ("      OFFSET 0 10 0\n    }", "      OFFSET 0 10 0\n      CHANNELS 1 Xrotation\n    }"), ("}\nMOTION", "MOTION"),
              ("{\n  OFFSET 0 0 0", "  OFFSET 0 0 0"), ("End Site", "End Sight")]
     for k, (old, new) in enumerate(edits):

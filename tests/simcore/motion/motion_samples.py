@@ -97,3 +97,27 @@ def body_cloud(skeleton: Skeleton, per_bone: int = 40, radius: float = 0.05, see
     o = np.concatenate(owners)
     w = sp.csr_matrix((np.ones(len(v)), (np.arange(len(v)), o)), shape=(len(v), skeleton.num_joints))
     return v, w
+
+
+# A two-joint clip of two frames: the smallest valid BVH (parser tests, hostile-input edits).
+SMALL_BVH = """HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT Spine
+  {
+    OFFSET 0 10 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    End Site
+    {
+      OFFSET 0 10 0
+    }
+  }
+}
+MOTION
+Frames: 2
+Frame Time: 0.033333
+0 90 0 0 0 0 0 0 0
+1 90 0 10 20 30 40 50 60
+"""

@@ -12,29 +12,8 @@ from simcore.errors import InvalidInput, LimitExceeded
 from simcore.io import bvh
 from simcore.io.bvh import parse_bvh
 from simcore.skeleton import kinematics
+from tests.simcore.motion.motion_samples import SMALL_BVH as SMALL
 from tests.simcore.motion.motion_samples import _depth_first, bvh_text, humanoid
-
-SMALL = """HIERARCHY
-ROOT Hips
-{
-  OFFSET 0 0 0
-  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
-  JOINT Spine
-  {
-    OFFSET 0 10 0
-    CHANNELS 3 Zrotation Xrotation Yrotation
-    End Site
-    {
-      OFFSET 0 10 0
-    }
-  }
-}
-MOTION
-Frames: 2
-Frame Time: 0.033333
-0 90 0 0 0 0 0 0 0
-1 90 0 10 20 30 40 50 60
-"""
 
 
 @pytest.mark.parametrize("clip, joints, frames, fps", [
