@@ -38,7 +38,7 @@ class TrainConfig:
     val_every: int = 250
     log_every: int = 50
     seed: int = 0
-    threads: int = 1  # small per-sample ops: 2 intra-op threads ran 10x slower than 1 when another process held a core
+    threads: int = 1  # per-sample ops are small: extra intra-op threads spin and wait when another process holds a core
     model: ModelConfig = field(default_factory=ModelConfig)
 
 
