@@ -1,4 +1,4 @@
-"""SQLAlchemy models: API keys, uploaded assets, jobs and their artifacts."""
+"""SQLAlchemy models: API keys, uploaded assets, jobs and their artifacts, webhook deliveries, workers."""
 
 from __future__ import annotations
 
@@ -58,6 +58,13 @@ class ApiKey(Base):
     is_admin: Mapped[bool] = mapped_column(Boolean, default=False, server_default=false())
     created_at: Mapped[datetime] = mapped_column(UTCDateTime, default=utcnow)
     revoked_at: Mapped[datetime | None] = mapped_column(UTCDateTime, nullable=True)
+    # webhooks: the default callback of this key's jobs and the secret their signatures use (api.webhooks.signing)
+    webhook_url: Mapped[str | None] = mapped_column(Text, nullable=True)
+    webhook_secret: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    # quotas; None takes the service-wide default (api.quotas)
+    max_concurrent_jobs: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    max_jobs_per_hour: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    max_storage_bytes: Mapped[int | None] = mapped_column(BigInteger, nullable=True)
 
 
 class Asset(Base):
@@ -79,6 +86,7 @@ class Job(Base):
         UniqueConstraint("owner_id", "idempotency_key", name="uq_jobs_owner_idempotency"),
         Index("ix_jobs_owner_created", "owner_id", "created_at"),
         Index("ix_jobs_status_lease", "status", "lease_expires_at"),
+        Index("ix_jobs_finished_at", "finished_at"),
     )
 
     id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
@@ -105,6 +113,8 @@ class Job(Base):
     error_message: Mapped[str | None] = mapped_column(Text, nullable=True)
     # {code, stage, message, figure, threshold, hard, frame} per quality check or stage notice (simcore.gate)
     warnings: Mapped[list] = mapped_column(JSON, default=list, server_default=text("'[]'"))
+    callback_url: Mapped[str | None] = mapped_column(Text, nullable=True)  # webhook of this job (else the key's default)
+    timings: Mapped[dict | None] = mapped_column(JSON, nullable=True)  # seconds per pipeline stage, on success
 
     mesh_asset: Mapped[Asset] = relationship(foreign_keys=[mesh_asset_id], lazy="joined")
     motion_asset: Mapped[Asset | None] = relationship(foreign_keys=[motion_asset_id], lazy="joined")
@@ -127,3 +137,33 @@ class Artifact(Base):
     path: Mapped[str] = mapped_column(Text)
 
     job: Mapped[Job] = relationship(back_populates="artifacts")
+
+
+class WebhookDelivery(Base):
+    """One event to POST to a callback URL, with every attempt made so far (the outbox the dispatcher drains)."""
+
+    __tablename__ = "webhook_deliveries"
+    __table_args__ = (Index("ix_deliveries_due", "status", "next_attempt_at"),)
+
+    id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    job_id: Mapped[uuid.UUID | None] = mapped_column(ForeignKey("jobs.id", ondelete="SET NULL"), nullable=True, index=True)
+    owner_id: Mapped[uuid.UUID] = mapped_column(ForeignKey("api_keys.id"))
+    event: Mapped[str] = mapped_column(String(32))
+    url: Mapped[str] = mapped_column(Text)
+    payload: Mapped[dict] = mapped_column(JSON)
+    status: Mapped[str] = mapped_column(String(16), default="pending")  # pending | delivered | failed
+    attempts: Mapped[list] = mapped_column(JSON, default=list)  # [{at, status_code, error, seconds}]
+    next_attempt_at: Mapped[datetime | None] = mapped_column(UTCDateTime, nullable=True)
+    created_at: Mapped[datetime] = mapped_column(UTCDateTime, default=utcnow)
+    delivered_at: Mapped[datetime | None] = mapped_column(UTCDateTime, nullable=True)
+
+
+class Worker(Base):
+    """A running worker process, refreshed by its maintenance thread (worker count in /metrics)."""
+
+    __tablename__ = "workers"
+
+    id: Mapped[str] = mapped_column(String(200), primary_key=True)
+    concurrency: Mapped[int] = mapped_column(Integer)
+    started_at: Mapped[datetime] = mapped_column(UTCDateTime, default=utcnow)
+    last_seen_at: Mapped[datetime] = mapped_column(UTCDateTime, default=utcnow)
