@@ -25,6 +25,24 @@ class JobSettings(BaseModel):
     worker_check_seconds: float = Field(5.0, gt=0, description="how often serve checks its embedded worker")
 
 
+class WebhookSettings(BaseModel):
+    """Webhook deliveries (RIGFORGE_WEBHOOKS__<NAME>)."""
+
+    timeout_seconds: float = Field(10.0, gt=0, description="one POST to a callback URL gives up after this long")
+    max_attempts: int = Field(8, ge=1, description="attempts before a delivery is marked failed")
+    backoff_seconds: float = Field(10.0, gt=0, description="wait before the first retry; doubled on each further one")
+    backoff_max_seconds: float = Field(3600.0, gt=0, description="longest wait between two attempts")
+    poll_seconds: float = Field(1.0, gt=0, description="how often a worker looks for deliveries that are due")
+
+
+class QuotaSettings(BaseModel):
+    """Per-key limits when the key sets none of its own (RIGFORGE_QUOTAS__<NAME>; 0 = unlimited)."""
+
+    concurrent_jobs: int = Field(20, ge=0, description="jobs queued or running at once")
+    jobs_per_hour: int = Field(500, ge=0, description="jobs submitted in any 60 minutes")
+    storage_mb: float = Field(51200.0, ge=0, description="uploads and artifacts kept")
+
+
 class Settings(BaseSettings):
     """Service configuration; every field is documented in the README."""
 
@@ -41,6 +59,15 @@ class Settings(BaseSettings):
     host: str = "127.0.0.1"
     port: int = 8000
     jobs: JobSettings = Field(default_factory=JobSettings)
+    webhooks: WebhookSettings = Field(default_factory=WebhookSettings)
+    quotas: QuotaSettings = Field(default_factory=QuotaSettings)
+    retention_days: float = Field(0.0, ge=0, description="finished jobs older than this are deleted with their files; 0 keeps them")
+    cleanup_seconds: float = Field(3600.0, gt=0, description="period of the cleanup (retention and orphaned files) in each worker")
+    orphan_grace_seconds: float = Field(3600.0, gt=0, description="an upload no job refers to is deleted once it is this old")
+    rate_limit: str = Field("100/second;3000/minute", description="requests per API key, in the `limits` notation ('N/period;...')")
+    rate_limit_storage: str | None = Field(None, description="where API replicas share rate-limit counters (redis://...); "
+                                           "default the Redis broker, else this process's memory")
+    log_format: Literal["text", "json"] = Field("text", description="json: one JSON object per log line, with job_id where known")
 
     @model_validator(mode="after")
     def _resolve(self) -> Settings:
