@@ -7,12 +7,12 @@ from pathlib import Path
 
 from fastapi import FastAPI
 from fastapi.middleware.gzip import GZipMiddleware
-from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
 
-from api import errors, health
+from api import docs_pages, errors, health
 from api.jobs.router import router as jobs_router
 from api.keys.router import router as keys_router
+from api.openapi import DocumentedAPI, operation_id
 from api.security_headers import SecurityHeaders
 from api.settings import get_settings
 from api.upload_limit import UploadLimit
@@ -22,20 +22,16 @@ WEB_DIR = Path(__file__).resolve().parents[1] / "web"
 BODY_SLACK_BYTES = 1024 * 1024
 
 
-def operation_id(route: APIRoute) -> str:
-    """Clean operation ids (`jobs-submit_job`) so generated clients read well."""
-    return f"{route.tags[0]}-{route.name}" if route.tags else route.name
-
-
 def create_app() -> FastAPI:
     settings = get_settings()
     settings.data_dir.mkdir(parents=True, exist_ok=True)
     spool = settings.storage_dir / "tmp"
     spool.mkdir(parents=True, exist_ok=True)
     tempfile.tempdir = str(spool)  # multipart spooling stays inside the data directory
-    app = FastAPI(title="RigForge", version="0.1.0", generate_unique_id_function=operation_id,
-                  description="Automatic rigging and skinning of 3D characters.")
+    app = DocumentedAPI(title="RigForge", version="0.1.0", generate_unique_id_function=operation_id, docs_url=None, redoc_url=None,
+                        description="Automatic rigging and skinning of 3D characters.")
     errors.install(app)
+    app.include_router(docs_pages.router)
     app.include_router(health.router)
     app.include_router(jobs_router)
     app.include_router(keys_router)

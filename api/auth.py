@@ -5,19 +5,20 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import Depends, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from api.db import session_scope
 from api.errors import Problem
 from api.keys.service import find_active
 from api.models import ApiKey
 
+# Documents the scheme in OpenAPI (generated clients send the header); this module answers the 401 itself.
+bearer = HTTPBearer(auto_error=False, scheme_name="bearerAuth", description="an API key: `Authorization: Bearer <key>`")
 
-def current_key(request: Request) -> ApiKey:
+
+def current_key(request: Request, credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)]) -> ApiKey:
     """The active key named by `Authorization: Bearer <key>` (or `?key=` for EventSource/downloads)."""
-    header = request.headers.get("authorization", "")
-    scheme, _, secret = header.partition(" ")
-    if scheme.lower() != "bearer" or not secret:
-        secret = request.query_params.get("key", "")
+    secret = credentials.credentials if credentials else request.query_params.get("key", "")
     if not secret:
         raise Problem(401, "unauthorized", "send an API key as 'Authorization: Bearer <key>'", headers={"WWW-Authenticate": "Bearer"})
     with session_scope() as session:

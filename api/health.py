@@ -6,6 +6,7 @@ import uuid
 
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel, Field
 from sqlalchemy import text
 
 from api.db import get_engine
@@ -14,7 +15,15 @@ from api.settings import get_settings
 router = APIRouter(tags=["health"])
 
 
-@router.get("/healthz", summary="The process is up")
+class Readiness(BaseModel):
+    """What /readyz answers, ready (200) or not (503)."""
+
+    status: str = Field(examples=["ready"], description="`ready` or `not_ready`")
+    checks: dict[str, str] = Field(examples=[{"database": "ok", "broker": "ok", "storage": "ok"}],
+                                   description="`ok`, or the error of each check")
+
+
+@router.get("/healthz", summary="The process is up", operation_id="getHealth")
 def healthz() -> dict:
     return {"status": "ok"}
 
@@ -38,7 +47,8 @@ def _check_database() -> None:
         conn.execute(text("SELECT 1"))
 
 
-@router.get("/readyz", summary="Database, broker and storage are reachable")
+@router.get("/readyz", summary="Database, broker and storage are reachable", operation_id="getReadiness", response_model=Readiness,
+            responses={503: {"model": Readiness, "description": "a check failed (the same body, `not_ready`)"}})
 def readyz() -> JSONResponse:
     checks = {}
     for name, check in (("database", _check_database), ("broker", _check_broker), ("storage", _check_storage)):

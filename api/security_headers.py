@@ -6,16 +6,19 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 # The dashboard is one same-origin bundle: no inline script, no third-party origin. Its views set inline
 # style attributes (bar widths, colours), hence 'unsafe-inline' for styles only. GLB textures decode through
-# blob:/data: URLs. /docs and /redoc load Swagger UI/ReDoc from a CDN, so they get no CSP.
+# blob:/data: URLs.
 DASHBOARD_CSP = ("default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' data: blob:; "
                  "connect-src 'self' blob: data:; worker-src 'self' blob:; object-src 'none'; base-uri 'none'; "
                  "frame-ancestors 'none'; form-action 'self'")
 COMMON = [(b"x-content-type-options", b"nosniff"), (b"referrer-policy", b"no-referrer"), (b"x-frame-options", b"DENY")]
-CDN_PAGES = ("/docs", "/redoc")
+# /docs and /redoc load Swagger UI/ReDoc from this server (api/docs_pages.py) and start them with FastAPI's inline script.
+DOCS_PAGES = ("/docs", "/redoc")
+DOCS_CSP = ("default-src 'self'; script-src 'self' 'unsafe-inline'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
+            "connect-src 'self'; worker-src 'self' blob:; object-src 'none'; base-uri 'none'; frame-ancestors 'none'; form-action 'self'")
 
 
 class SecurityHeaders:
-    """nosniff, no referrer, no framing everywhere; the dashboard's CSP on all but the API docs pages."""
+    """nosniff, no referrer, no framing everywhere; the dashboard's CSP on all but the API docs pages, which get their own."""
 
     def __init__(self, app: ASGIApp) -> None:
         self.app = app
@@ -24,9 +27,8 @@ class SecurityHeaders:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        extra = list(COMMON)
-        if not scope["path"].startswith(CDN_PAGES):
-            extra.append((b"content-security-policy", DASHBOARD_CSP.encode()))
+        csp = DOCS_CSP if scope["path"] in DOCS_PAGES else DASHBOARD_CSP
+        extra = [*COMMON, (b"content-security-policy", csp.encode())]
 
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":

@@ -1,8 +1,6 @@
-"""Write the API's OpenAPI document (plus the JobOptions schema) for the dashboard's typed client.
+"""Write the API's OpenAPI document for the dashboard's typed client (it types what it submits with JobOptions).
 
 Usage: python web/dump_openapi.py web/openapi.json
-The `options` form field of POST /api/v1/jobs is a JSON string, so its model does not appear in the
-generated spec; it is added under components.schemas.JobOptions so the page types what it submits.
 """
 
 from __future__ import annotations
@@ -33,12 +31,6 @@ def openapi_document() -> dict:
                 os.environ["RIGFORGE_DATA_DIR"] = saved
             get_settings.cache_clear()
             tempfile.tempdir = saved_tempdir  # create_app points multipart spooling into the data dir
-    from simcore.options import JobOptions
-
-    schemas = spec.setdefault("components", {}).setdefault("schemas", {})
-    options = JobOptions.model_json_schema(ref_template="#/components/schemas/{model}")
-    schemas.update(options.pop("$defs", {}))
-    schemas["JobOptions"] = options
     return spec
 
 

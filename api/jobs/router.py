@@ -22,15 +22,19 @@ from api.jobs import service, state
 from api.jobs.schemas import JobOut, JobPage, JobStatus
 from api.jobs.uploads import store_skeleton, store_upload
 from api.models import Job
+from api.openapi import json_part, json_part_encoding
+from api.problem_schema import problem_responses
 from api.queue import enqueue_job
 from api.settings import get_settings
 from api.storage import LocalStorage
 from simcore.io.json_bounds import JsonTooDeep, loads_bounded
 from simcore.options import JobOptions
 
-router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"])
+router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], responses=problem_responses(401))
 SSE_POLL_SECONDS = 0.3
 MAX_OPTIONS_DEPTH = 8  # JobOptions nests 3 deep (refine.bone_stiffness)
+BINARY = {"schema": {"type": "string", "format": "binary"}}
+OPTIONS_EXAMPLE = {"skeleton": "auto", "skinning": "auto", "motion": {"in_place": True}, "fbx": True}
 
 
 def parse_options(raw: str | None) -> JobOptions:
@@ -70,13 +74,19 @@ OwnedJob = Annotated[Job, Depends(load_job)]
 
 
 @router.post("", status_code=202, response_model=JobOut,
-             summary="Submit a mesh (and optional motion, or an edited skeleton to re-skin with) for rigging")
+             summary="Submit a mesh (and optional motion, or an edited skeleton to re-skin with) for rigging",
+             responses=problem_responses(404, 409, 413, 415, 422, 503, examples={
+                 404: ("job_not_found", "no job 3fa85f64-5717-4562-b3fc-2c963f66afa6 (source_job)", "source_job"),
+                 409: ("idempotency_conflict", "this Idempotency-Key was used with a different request", "Idempotency-Key"),
+                 422: ("invalid_options", "options.max_joints: Input should be less than or equal to 256", "options.max_joints")}),
+             openapi_extra=json_part_encoding("options"))
 def submit_job(
     request: Request,
     key: CurrentKey,
     mesh: Annotated[UploadFile, File(description="GLB, glTF (embedded buffers), OBJ, PLY or STL")],
     motion: Annotated[UploadFile | None, File(description="BVH, or GLB/glTF carrying animation clips")] = None,
-    options: Annotated[str | None, Form(description="JobOptions as a JSON string")] = None,
+    options: Annotated[str | None, Form(description="JobOptions as JSON (a part of type application/json); every field has a default",
+                                        json_schema_extra=json_part(JobOptions, example=OPTIONS_EXAMPLE))] = None,
     skeleton: Annotated[UploadFile | None, File(description="an edited skeleton.json to re-skin with "
                                                             "(with options.skeleton 'keep')")] = None,
     source_job: Annotated[uuid.UUID | None, Form(description="the job whose skeleton was edited (links the two)")] = None,
@@ -108,7 +118,8 @@ def submit_job(
         return service.to_schema(session.get_one(Job, job_id), base_url(request))
 
 
-@router.get("", response_model=JobPage, summary="List your jobs, newest first")
+@router.get("", response_model=JobPage, summary="List your jobs, newest first", responses=problem_responses(422, examples={
+    422: ("invalid_cursor", "cursor is malformed", "cursor")}))
 def list_jobs(
     request: Request, key: CurrentKey, status: JobStatus | None = None,
     limit: Annotated[int, Query(ge=1, le=100)] = 20, cursor: str | None = None,
@@ -121,12 +132,14 @@ def list_jobs(
         return JobPage(items=[service.to_schema(j, base_url(request)) for j in jobs], next_cursor=next_cursor)
 
 
-@router.get("/{job_id}", response_model=JobOut, summary="One job's status, progress, error and artifacts")
+@router.get("/{job_id}", response_model=JobOut, summary="One job's status, progress, error and artifacts",
+            responses=problem_responses(404, 422))
 def get_job(request: Request, job: OwnedJob) -> JobOut:
     return service.to_schema(job, base_url(request))
 
 
-@router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job")
+@router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job",
+             responses=problem_responses(404, 409, 422))
 def cancel_job(request: Request, job: OwnedJob) -> JobOut:
     with session_scope() as session:
         if not state.cancel(session, job.id):
@@ -134,7 +147,9 @@ def cancel_job(request: Request, job: OwnedJob) -> JobOut:
         return service.to_schema(session.get_one(Job, job.id), base_url(request))
 
 
-@router.get("/{job_id}/artifacts/{name}", summary="Download an artifact", response_class=FileResponse)
+@router.get("/{job_id}/artifacts/{name}", summary="Download an artifact", response_class=FileResponse,
+            responses={200: {"description": "the artifact's bytes", "content": {"application/octet-stream": BINARY}},
+                       **problem_responses(404, 422, examples={404: ("artifact_not_found", "job has no artifact 'rigged.fbx'", None)})})
 def download_artifact(job: OwnedJob, name: str) -> FileResponse:
     artifact = next((a for a in job.artifacts if a.name == name), None)
     if artifact is None:
@@ -142,7 +157,10 @@ def download_artifact(job: OwnedJob, name: str) -> FileResponse:
     return FileResponse(artifact.path, media_type=artifact.media_type, filename=artifact.name)
 
 
-@router.get("/{job_id}/artifacts.zip", summary="Download every artifact as one zip", response_class=StreamingResponse)
+@router.get("/{job_id}/artifacts.zip", summary="Download every artifact as one zip", response_class=StreamingResponse,
+            operation_id="downloadAllArtifacts",
+            responses={200: {"description": "a zip of every artifact", "content": {"application/zip": BINARY}},
+                       **problem_responses(404, 422, examples={404: ("artifact_not_found", "job has no artifacts", None)})})
 def download_all(job: OwnedJob) -> StreamingResponse:
     if not job.artifacts:
         raise Problem(404, "artifact_not_found", "job has no artifacts")
@@ -161,7 +179,8 @@ def download_all(job: OwnedJob) -> StreamingResponse:
                              headers={"Content-Disposition": f'attachment; filename="rigforge-{job.id}.zip"'})
 
 
-@router.post("/{job_id}/rerun", status_code=202, response_model=JobOut, summary="Run a job again on the same inputs and options")
+@router.post("/{job_id}/rerun", status_code=202, response_model=JobOut, summary="Run a job again on the same inputs and options",
+             responses=problem_responses(404, 422))
 def rerun_job(request: Request, job: OwnedJob) -> JobOut:
     with session_scope() as session:
         again = service.rerun_job(session, job=session.get_one(Job, job.id))
@@ -171,7 +190,8 @@ def rerun_job(request: Request, job: OwnedJob) -> JobOut:
         return service.to_schema(session.get_one(Job, again_id), base_url(request))
 
 
-@router.delete("/{job_id}", status_code=204, summary="Delete a finished job and its files")
+@router.delete("/{job_id}", status_code=204, summary="Delete a finished job and its files", responses=problem_responses(404, 409, 422, examples={
+    409: ("job_active", "job is running: cancel it first", None)}))
 def delete_job(job: OwnedJob) -> Response:
     with session_scope() as session:
         if not service.delete_job(session, job_id=job.id, finished=state.TERMINAL):
@@ -187,7 +207,9 @@ def _snapshot(job_id: uuid.UUID, base: str) -> dict | None:
 
 
 @router.get("/{job_id}/events", summary="Server-sent events: one per status/stage/progress change",
-            response_class=StreamingResponse)
+            response_class=StreamingResponse, operation_id="streamJobEvents",
+            responses={200: {"description": "`event: job` with the job's JSON as data, until it ends",
+                             "content": {"text/event-stream": {"schema": {"type": "string"}}}}, **problem_responses(404, 422)})
 async def job_events(request: Request, job: OwnedJob) -> StreamingResponse:
     base = base_url(request)
 

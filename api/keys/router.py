@@ -18,8 +18,9 @@ from api.db import session_scope
 from api.errors import Problem
 from api.keys import service
 from api.models import ApiKey
+from api.problem_schema import problem_responses
 
-router = APIRouter(prefix="/api/v1/keys", tags=["keys"])
+router = APIRouter(prefix="/api/v1/keys", tags=["keys"], responses=problem_responses(401))
 
 
 class KeyOut(BaseModel):
@@ -56,25 +57,27 @@ def key_admin(key: CurrentKey) -> ApiKey:
 KeyAdmin = Annotated[ApiKey, Depends(key_admin)]
 
 
-@router.get("/me", response_model=KeyOut, summary="The key this request is signed with")
+@router.get("/me", response_model=KeyOut, summary="The key this request is signed with", operation_id="getCurrentKey")
 def whoami(key: CurrentKey) -> KeyOut:
     return to_schema(key)
 
 
-@router.get("", response_model=list[KeyOut], summary="List every key, oldest first (admin keys only)")
+@router.get("", response_model=list[KeyOut], summary="List every key, oldest first (admin keys only)", responses=problem_responses(403))
 def list_keys(_: KeyAdmin) -> list[KeyOut]:
     with session_scope() as session:
         return [to_schema(k) for k in service.list_keys(session)]
 
 
-@router.post("", status_code=201, response_model=KeyCreated, summary="Create a key (admin keys only)")
+@router.post("", status_code=201, response_model=KeyCreated, summary="Create a key (admin keys only)",
+             responses=problem_responses(403, 422, examples={422: ("validation_error", "name: String should have at least 1 character", "name")}))
 def create_key(body: KeyCreate, _: KeyAdmin) -> KeyCreated:
     with session_scope() as session:
         row, secret = service.create_key(session, name=body.name.strip() or "unnamed", admin=body.admin)
         return KeyCreated(key=to_schema(row), secret=secret)
 
 
-@router.post("/{key_id}/revoke", response_model=KeyOut, summary="Revoke a key (admin keys only)")
+@router.post("/{key_id}/revoke", response_model=KeyOut, summary="Revoke a key (admin keys only)",
+             responses=problem_responses(403, 404, 422, examples={404: ("key_not_found", "no key 3fa85f64-5717-4562-b3fc-2c963f66afa6", None)}))
 def revoke_key(key_id: uuid.UUID, _: KeyAdmin) -> KeyOut:
     with session_scope() as session:
         row = service.revoke(session, key_id_or_prefix=str(key_id))

@@ -16,6 +16,10 @@ def test_the_dashboard_csp_allows_only_its_own_origin(client):
     assert "script-src 'self';" in csp and "unsafe-eval" not in csp and "connect-src 'self' " in csp
 
 
-def test_the_docs_page_keeps_its_cdn_assets(client):
-    r = client.get("/docs")
-    assert r.status_code == 200 and "content-security-policy" not in r.headers and r.headers["x-frame-options"] == "DENY"
+def test_the_docs_pages_load_their_assets_from_this_server_only(client):
+    for page, asset in (("/docs", "/docs-assets/swagger-ui/swagger-ui-bundle.js"), ("/redoc", "/docs-assets/redoc/redoc.standalone.js")):
+        r = client.get(page)
+        assert r.status_code == 200 and r.headers["x-frame-options"] == "DENY", page
+        assert "default-src 'self'" in r.headers["content-security-policy"] and "http" not in r.headers["content-security-policy"]
+        assert f'"{asset}"' in r.text and "cdn" not in r.text.lower(), page
+        assert client.get(asset).status_code == 200, asset
