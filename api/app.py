@@ -11,11 +11,14 @@ from fastapi.staticfiles import StaticFiles
 
 from api import docs_pages, errors, health
 from api.jobs.router import router as jobs_router
+from api.jobs.signed_router import router as files_router
 from api.keys.router import router as keys_router
+from api.metrics import router as metrics_router
 from api.openapi import DocumentedAPI, operation_id
 from api.security_headers import SecurityHeaders
 from api.settings import get_settings
 from api.upload_limit import UploadLimit
+from api.webhooks.router import router as webhook_router
 
 WEB_DIR = Path(__file__).resolve().parents[1] / "web"
 # Room for the multipart envelope and a motion file next to a mesh at the cap.
@@ -34,7 +37,10 @@ def create_app() -> FastAPI:
     app.include_router(docs_pages.router)
     app.include_router(health.router)
     app.include_router(jobs_router)
+    app.include_router(files_router)
     app.include_router(keys_router)
+    app.include_router(webhook_router)
+    app.include_router(metrics_router)
     app.add_middleware(GZipMiddleware, minimum_size=1024)  # the viewer bundle is ~660 KB raw, ~170 KB gzipped; SSE is excluded
     app.add_middleware(UploadLimit, max_bytes=2 * settings.max_upload_bytes + BODY_SLACK_BYTES)
     app.add_middleware(SecurityHeaders)  # outermost: also on 413s from UploadLimit

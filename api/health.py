@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import uuid
-
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 from sqlalchemy import text
 
 from api.db import get_engine
-from api.settings import get_settings
 
 router = APIRouter(tags=["health"])
 
@@ -36,10 +33,9 @@ def _check_broker() -> None:
 
 
 def _check_storage() -> None:
-    probe = get_settings().storage_dir / "tmp" / f"ready-{uuid.uuid4().hex}"
-    probe.parent.mkdir(parents=True, exist_ok=True)
-    probe.write_bytes(b"ok")
-    probe.unlink()
+    from api.storage import get_storage
+
+    get_storage().check()
 
 
 def _check_database() -> None:

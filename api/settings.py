@@ -6,8 +6,10 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from simcore.budgets import Budgets
 
 
 class JobSettings(BaseModel):
@@ -56,6 +58,13 @@ class Settings(BaseSettings):
     max_vertices: int = Field(2_000_000, gt=0, description="meshes with more vertices are refused")
     mpm_max_particles: int = Field(30_000, gt=0, description="particle budget of physics refinement per job")
     max_parallel_parses: int = Field(2, gt=0, description="glTF uploads the API checks at once (each costs a few times its size)")
+    storage_url: str | None = Field(None, pattern=r"^s3://[^/]+(/.*)?$",
+                                    description="s3://bucket/prefix for S3-compatible object storage; default local files in data_dir")
+    s3_endpoint_url: str | None = Field(None, description="S3 endpoint other than AWS (MinIO, Ceph, R2); credentials from AWS_* variables")
+    s3_public_endpoint_url: str | None = Field(None, description="endpoint browsers reach, for presigned download URLs (default s3_endpoint_url)")
+    signing_key: SecretStr | None = Field(None, description="HMAC key of signed download URLs; default a random key kept in data_dir "
+                                          "(set it when API replicas do not share data_dir)")
+    download_url_seconds: int = Field(900, gt=0, le=7 * 24 * 3600, description="how long a signed download URL stays valid")
     host: str = "127.0.0.1"
     port: int = 8000
     jobs: JobSettings = Field(default_factory=JobSettings)
@@ -68,6 +77,7 @@ class Settings(BaseSettings):
     rate_limit_storage: str | None = Field(None, description="where API replicas share rate-limit counters (redis://...); "
                                            "default the Redis broker, else this process's memory")
     log_format: Literal["text", "json"] = Field("text", description="json: one JSON object per log line, with job_id where known")
+    budgets: Budgets = Field(default_factory=Budgets, description="per-job time, memory and sampling budgets")
 
     @model_validator(mode="after")
     def _resolve(self) -> Settings:

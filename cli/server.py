@@ -41,12 +41,18 @@ def ensure_local_key() -> str | None:
 def worker(
     concurrency: Annotated[int, typer.Option(help="parallel jobs in this worker")] = 1,
     loglevel: Annotated[str, typer.Option(help="celery log level")] = "INFO",
+    queues: Annotated[str, typer.Option(help="queues to consume, comma-separated: 'cpu', 'gpu' (refinement and "
+                                            "learned models, routed there while such a worker runs) or both")] = "cpu,gpu",
 ) -> None:
     """Run a Celery worker (with the reconciler) for the configured broker."""
-    from worker.celery_app import QUEUE, make_celery
+    from worker.celery_app import make_celery
+    from worker.routing import QUEUES
 
+    names = [q.strip() for q in queues.split(",") if q.strip()]
+    if not names or set(names) - set(QUEUES):
+        raise typer.BadParameter(f"queues are {', '.join(QUEUES)}; got {queues!r}", param_hint="--queues")
     make_celery().worker_main([
-        "worker", f"--loglevel={loglevel}", f"--concurrency={concurrency}", "--pool=prefork", "-Q", QUEUE,
+        "worker", f"--loglevel={loglevel}", f"--concurrency={concurrency}", "--pool=prefork", "-Q", ",".join(names),
         "--without-gossip", "--without-mingle", "--without-heartbeat", "--hostname", f"rigforge-{os.getpid()}@%h",
     ])
 
@@ -58,6 +64,8 @@ def serve(
 ) -> None:
     """Migrate, then serve the API and dashboard, with one embedded worker unless --no-worker."""
     import uvicorn
+
+    from api.log_format import log_config
 
     settings = get_settings()
     migrate()
@@ -74,7 +82,7 @@ def serve(
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     try:
         uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
-                    log_level="info", timeout_graceful_shutdown=5)
+                    log_level="info", log_config=log_config(settings), timeout_graceful_shutdown=5)
     except KeyboardInterrupt:  # Ctrl-C: uvicorn re-raises SIGINT after its graceful shutdown
         pass
     finally:

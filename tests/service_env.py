@@ -11,11 +11,15 @@ from pathlib import Path
 def reset_singletons() -> None:
     from api.db import reset_caches
     from api.settings import get_settings
+    from api.signed_urls import signing_key
+    from api.storage import get_storage
     from worker.celery_app import make_celery
 
     get_settings.cache_clear()
     reset_caches()
     make_celery.cache_clear()
+    get_storage.cache_clear()
+    signing_key.cache_clear()
 
 
 @contextmanager

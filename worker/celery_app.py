@@ -7,18 +7,20 @@ Config choices (why):
 - soft/hard time limits per job; the Redis visibility timeout is above the hard limit so Redis never
   re-delivers a job that is still legitimately running.
 - filesystem:// (the embedded default) keeps the queue in files under the data directory: no server.
+- two queues, `cpu` and `gpu` (worker.routing decides which a job goes to); `rigforge worker --queues` picks.
 """
 
 from __future__ import annotations
 
+import uuid
 from functools import lru_cache
 
 from celery import Celery
 
 from api.settings import Settings, get_settings
+from worker.routing import CPU_QUEUE, queue_for
 
 TASK_NAME = "rigforge.run_job"
-QUEUE = "rigforge"
 
 
 def _broker_options(settings: Settings) -> tuple[str, dict]:
@@ -43,7 +45,7 @@ def make_celery() -> Celery:
         worker_prefetch_multiplier=1,
         task_ignore_result=True,
         result_backend=None,
-        task_default_queue=QUEUE,
+        task_default_queue=CPU_QUEUE,
         task_soft_time_limit=settings.jobs.soft_time_limit,
         task_time_limit=settings.jobs.time_limit,
         broker_transport_options=options,
@@ -57,5 +59,5 @@ def make_celery() -> Celery:
 
 
 def enqueue(job_id: str) -> None:
-    """Send a job id to the workers."""
-    make_celery().send_task(TASK_NAME, args=[job_id], queue=QUEUE)
+    """Send a job id to the workers, on the queue its work belongs to (worker.routing)."""
+    make_celery().send_task(TASK_NAME, args=[job_id], queue=queue_for(uuid.UUID(job_id)))

@@ -12,7 +12,7 @@ from api.db import session_scope
 from api.jobs import state
 from api.models import Job
 from api.settings import Settings
-from api.storage import LocalStorage
+from api.storage import Storage, get_storage
 from simcore.errors import Canceled, SimcoreError
 from simcore.options import JobOptions
 
@@ -73,24 +73,31 @@ def execute(job_id: uuid.UUID, settings: Settings, worker_id: str) -> str:
         if claim is None:
             return "skipped"
         job = session.get_one(Job, job_id)  # the claim just updated its row
-        motion = job.motion_asset
-        inputs_spec = (Path(job.mesh_asset.path), job.mesh_asset.format, Path(motion.path) if motion else None,
-                       motion.format if motion else None, Path(motion.filename).stem if motion else None,
-                       Path(job.skeleton_asset.path) if job.skeleton_asset else None)
+        mesh, motion, skeleton = job.mesh_asset, job.motion_asset, job.skeleton_asset
+        mesh_spec = (mesh.path, mesh.format)
+        motion_spec = (motion.path, motion.format, Path(motion.filename).stem) if motion else None
+        skeleton_locator = skeleton.path if skeleton else None
         options = JobOptions.model_validate(job.options)
-    storage = LocalStorage(settings.storage_dir)
+    storage = get_storage()
     work = storage.work_dir(job_id, claim.attempt)
+    inputs = storage.scratch_dir(f"inputs-{job_id}-{claim.attempt}")  # fetched inputs stay out of the outputs
     heartbeat = Heartbeat(claim, settings)
     heartbeat.start()
     reporter = ProgressReporter(claim, heartbeat)
     try:
         from simcore.pipeline import PipelineInputs, run_pipeline  # heavy: torch/warp live behind this import
 
-        result = run_pipeline(PipelineInputs(*inputs_spec), options, work, reporter, reporter.check_cancel)
+        spec = PipelineInputs(storage.fetch(mesh_spec[0], inputs), mesh_spec[1])
+        if motion_spec:
+            spec.motion_path, spec.motion_format, spec.motion_name = storage.fetch(motion_spec[0], inputs), *motion_spec[1:]
+        if skeleton_locator:
+            spec.skeleton_path = storage.fetch(skeleton_locator, inputs)
+        result = run_pipeline(spec, options, work, reporter, reporter.check_cancel, settings.budgets)
         heartbeat.stop()
         rows = storage.publish(work, job_id, claim.attempt, sorted(result.artifacts))
         with session_scope() as session:
-            return "succeeded" if state.succeed(session, claim, rows, result.report.get("warnings", [])) else "lost"
+            return "succeeded" if state.succeed(session, claim, rows, result.report.get("warnings", []),
+                                               result.report.get("timings_s")) else "lost"
     except Canceled:
         storage.discard(work)
         return "canceled"
@@ -105,9 +112,10 @@ def execute(job_id: uuid.UUID, settings: Settings, worker_id: str) -> str:
         return _fail(claim, "internal_error", f"{type(exc).__name__}: {exc}", storage, work)
     finally:
         heartbeat.stop()
+        storage.discard(inputs)
 
 
-def _fail(claim: state.Claim, code: str, message: str, storage: LocalStorage, work: Path,
+def _fail(claim: state.Claim, code: str, message: str, storage: Storage, work: Path,
           warnings: list[dict] | None = None) -> str:
     storage.discard(work)
     with session_scope() as session:

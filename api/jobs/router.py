@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import json
-import tempfile
 import uuid
-import zipfile
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import AsyncIterator
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, File, Form, Header, Query, Request, Response, UploadFile
@@ -18,20 +16,27 @@ from pydantic import ValidationError
 from api.auth import CurrentKey
 from api.db import session_scope
 from api.errors import Problem
-from api.jobs import service, state
+from api.http_cache import etagged
+from api.jobs import lifecycle, service, state
+from api.jobs.artifact_responses import artifact_response, find_artifact, zip_response
 from api.jobs.schemas import JobOut, JobPage, JobStatus
 from api.jobs.uploads import store_skeleton, store_upload
 from api.models import Job
 from api.openapi import json_part, json_part_encoding
 from api.problem_schema import problem_responses
 from api.queue import enqueue_job
+from api.quotas import check_submit
+from api.ratelimit import rate_limited
 from api.settings import get_settings
-from api.storage import LocalStorage
+from api.storage import get_storage
+from api.webhooks.urls import checked_callback_url
 from simcore.io.json_bounds import JsonTooDeep, loads_bounded
 from simcore.options import JobOptions
 
-router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], responses=problem_responses(401))
+router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], dependencies=[Depends(rate_limited)], responses=problem_responses(401))
 SSE_POLL_SECONDS = 0.3
+# signed download URLs change with their expiry, not with the job: the ETag leaves them out
+VOLATILE = {"artifacts": {"__all__": {"download_url"}}, "download_all_url": True}
 MAX_OPTIONS_DEPTH = 8  # JobOptions nests 3 deep (refine.bone_stiffness)
 BINARY = {"schema": {"type": "string", "format": "binary"}}
 OPTIONS_EXAMPLE = {"skeleton": "auto", "skinning": "auto", "motion": {"in_place": True}, "fbx": True}
@@ -82,6 +87,7 @@ OwnedJob = Annotated[Job, Depends(load_job)]
              openapi_extra=json_part_encoding("options"))
 def submit_job(
     request: Request,
+    response: Response,
     key: CurrentKey,
     mesh: Annotated[UploadFile, File(description="GLB, glTF (embedded buffers), OBJ, PLY or STL")],
     motion: Annotated[UploadFile | None, File(description="BVH, or GLB/glTF carrying animation clips")] = None,
@@ -90,16 +96,20 @@ def submit_job(
     skeleton: Annotated[UploadFile | None, File(description="an edited skeleton.json to re-skin with "
                                                             "(with options.skeleton 'keep')")] = None,
     source_job: Annotated[uuid.UUID | None, Form(description="the job whose skeleton was edited (links the two)")] = None,
+    callback_url: Annotated[str | None, Form(description="http(s) URL that receives the webhook events of this job "
+                                                     "(default: the webhook URL of the key)")] = None,
     idempotency_key: Annotated[str | None, Header(alias="Idempotency-Key", max_length=200)] = None,
 ) -> JobOut:
     job_options = parse_options(options)
+    callback = checked_callback_url(callback_url, field="callback_url")
+    check_submit(key, get_settings().quotas, request.headers.get("content-length"))
     if skeleton is not None and job_options.skeleton != "keep":
         raise Problem(422, "invalid_options", "a skeleton file is used as it is: set options.skeleton to 'keep'",
                       field="options.skeleton")
     if source_job is not None:
         load_job(source_job, key)  # 404 unless it is the caller's
     settings = get_settings()
-    storage = LocalStorage(settings.storage_dir)
+    storage = get_storage()
     stored_mesh = store_upload(storage, mesh, kind="mesh", field="mesh", max_bytes=settings.max_upload_bytes)
     stored_motion = store_upload(storage, motion, kind="motion", field="motion", max_bytes=settings.max_upload_bytes) if motion else None
     stored_skeleton = store_skeleton(storage, skeleton, max_bytes=settings.max_upload_bytes) if skeleton else None
@@ -107,13 +117,15 @@ def submit_job(
         try:
             job, created = service.create_job(session, owner_id=key.id, mesh=stored_mesh, motion=stored_motion,
                                               options=job_options, idempotency_key=idempotency_key,
-                                              skeleton=stored_skeleton, source_job_id=source_job)
+                                              skeleton=stored_skeleton, source_job_id=source_job,
+                                              callback_url=callback)
         except service.IdempotencyConflict:
             raise Problem(409, "idempotency_conflict", "this Idempotency-Key was used with a different request",
                           field="Idempotency-Key") from None
         job_id = job.id
     if created:
         enqueue_job(job_id)
+    response.headers["Location"] = f"{router.prefix}/{job_id}"
     with session_scope() as session:
         return service.to_schema(session.get_one(Job, job_id), base_url(request))
 
@@ -134,8 +146,10 @@ def list_jobs(
 
 @router.get("/{job_id}", response_model=JobOut, summary="One job's status, progress, error and artifacts",
             responses=problem_responses(404, 422))
-def get_job(request: Request, job: OwnedJob) -> JobOut:
-    return service.to_schema(job, base_url(request))
+def get_job(request: Request, job: OwnedJob,
+            if_none_match: Annotated[str | None, Header(alias="If-None-Match", description="an ETag from an earlier answer: "
+                                                        "304 when the job has not changed")] = None) -> Response:
+    return etagged(service.to_schema(job, base_url(request)), if_none_match, exclude=VOLATILE)
 
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job",
@@ -150,11 +164,8 @@ def cancel_job(request: Request, job: OwnedJob) -> JobOut:
 @router.get("/{job_id}/artifacts/{name}", summary="Download an artifact", response_class=FileResponse,
             responses={200: {"description": "the artifact's bytes", "content": {"application/octet-stream": BINARY}},
                        **problem_responses(404, 422, examples={404: ("artifact_not_found", "job has no artifact 'rigged.fbx'", None)})})
-def download_artifact(job: OwnedJob, name: str) -> FileResponse:
-    artifact = next((a for a in job.artifacts if a.name == name), None)
-    if artifact is None:
-        raise Problem(404, "artifact_not_found", f"job has no artifact {name!r}")
-    return FileResponse(artifact.path, media_type=artifact.media_type, filename=artifact.name)
+def download_artifact(job: OwnedJob, name: str) -> Response:
+    return artifact_response(find_artifact(job, name))
 
 
 @router.get("/{job_id}/artifacts.zip", summary="Download every artifact as one zip", response_class=StreamingResponse,
@@ -162,41 +173,26 @@ def download_artifact(job: OwnedJob, name: str) -> FileResponse:
             responses={200: {"description": "a zip of every artifact", "content": {"application/zip": BINARY}},
                        **problem_responses(404, 422, examples={404: ("artifact_not_found", "job has no artifacts", None)})})
 def download_all(job: OwnedJob) -> StreamingResponse:
-    if not job.artifacts:
-        raise Problem(404, "artifact_not_found", "job has no artifacts")
-    spool = tempfile.TemporaryFile()  # written first: a zip's directory comes at its end
-    with zipfile.ZipFile(spool, "w", zipfile.ZIP_DEFLATED) as archive:
-        for artifact in job.artifacts:
-            archive.write(artifact.path, arcname=artifact.name)
-    spool.seek(0)
-
-    def chunks() -> Iterator[bytes]:
-        with spool:
-            while data := spool.read(1024 * 1024):
-                yield data
-
-    return StreamingResponse(chunks(), media_type="application/zip",
-                             headers={"Content-Disposition": f'attachment; filename="rigforge-{job.id}.zip"'})
+    return zip_response(job)
 
 
 @router.post("/{job_id}/rerun", status_code=202, response_model=JobOut, summary="Run a job again on the same inputs and options",
              responses=problem_responses(404, 422))
-def rerun_job(request: Request, job: OwnedJob) -> JobOut:
+def rerun_job(request: Request, response: Response, key: CurrentKey, job: OwnedJob) -> JobOut:
+    check_submit(key, get_settings().quotas, None)
     with session_scope() as session:
         again = service.rerun_job(session, job=session.get_one(Job, job.id))
         again_id = again.id
     enqueue_job(again_id)
+    response.headers["Location"] = f"{router.prefix}/{again_id}"
     with session_scope() as session:
         return service.to_schema(session.get_one(Job, again_id), base_url(request))
 
 
-@router.delete("/{job_id}", status_code=204, summary="Delete a finished job and its files", responses=problem_responses(404, 409, 422, examples={
-    409: ("job_active", "job is running: cancel it first", None)}))
+@router.delete("/{job_id}", status_code=204, summary="Delete a job with its artifacts and uploads (canceled first when active)",
+               responses=problem_responses(404, 422))
 def delete_job(job: OwnedJob) -> Response:
-    with session_scope() as session:
-        if not service.delete_job(session, job_id=job.id, finished=state.TERMINAL):
-            raise Problem(409, "job_active", f"job is {job.status}: cancel it first")
-    LocalStorage(get_settings().storage_dir).discard(get_settings().storage_dir / "jobs" / str(job.id))
+    lifecycle.delete_job(job.id)
     return Response(status_code=204)
 
 

@@ -8,6 +8,8 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
+from api.webhooks.schemas import WebhookDeliveryOut
+
 JobStatus = Literal["queued", "running", "succeeded", "failed", "canceled"]
 
 
@@ -33,7 +35,8 @@ class ArtifactOut(BaseModel):
     media_type: str
     size: int
     sha256: str
-    url: str
+    url: str = Field(description="the API download (send the key in the Authorization header)")
+    download_url: str = Field(description="a short-lived link that needs no key (signed, or presigned by the object store)")
 
 
 class InputFile(BaseModel):
@@ -60,6 +63,9 @@ class JobOut(BaseModel):
     error: JobError | None
     warnings: list[JobWarning]
     artifacts: list[ArtifactOut]
+    callback_url: str | None = Field(None, description="where this job's webhook events go (else the key's default URL)")
+    webhooks: list[WebhookDeliveryOut] = Field(default_factory=list, description="delivery log of this job's webhook events")
+    download_all_url: str | None = Field(None, description="a short-lived link to every artifact in one zip, no key needed")
 
 
 class JobPage(BaseModel):

@@ -8,14 +8,16 @@ import json
 import uuid
 from datetime import datetime
 
-from sqlalchemy import delete, or_, select, update
+from sqlalchemy import or_, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from api.db import rowcount
 from api.jobs.schemas import ArtifactOut, InputFile, JobError, JobOut, JobWarning
-from api.models import Artifact, Asset, Job
-from api.storage import StoredFile
+from api.models import Asset, Job
+from api.settings import get_settings
+from api.signed_urls import ZIP_NAME, signed_path
+from api.storage import StoredFile, get_storage
+from api.webhooks.schemas import delivery_log
 from simcore.options import JobOptions
 
 
@@ -24,16 +26,18 @@ class IdempotencyConflict(Exception):
 
 
 def request_hash(mesh_sha: str, motion_sha: str | None, options: JobOptions, skeleton_sha: str | None = None,
-                 source_job_id: uuid.UUID | None = None) -> str:
+                 source_job_id: uuid.UUID | None = None, callback_url: str | None = None) -> str:
     request = {"mesh": mesh_sha, "motion": motion_sha, "options": options.model_dump(mode="json")}
     if skeleton_sha or source_job_id:  # absent for plain jobs, so their hashes stay as they were
         request.update(skeleton=skeleton_sha, source_job=str(source_job_id) if source_job_id else None)
+    if callback_url:
+        request.update(callback_url=callback_url)
     canonical = json.dumps(request, sort_keys=True)
     return hashlib.sha256(canonical.encode()).hexdigest()
 
 
 def _asset(session: Session, owner_id: uuid.UUID, stored: StoredFile, filename: str, fmt: str) -> Asset:
-    asset = Asset(owner_id=owner_id, filename=filename[:255] or "upload", format=fmt, size=stored.size, sha256=stored.sha256, path=str(stored.path))
+    asset = Asset(owner_id=owner_id, filename=filename[:255] or "upload", format=fmt, size=stored.size, sha256=stored.sha256, path=stored.locator)
     session.add(asset)
     return asset
 
@@ -49,12 +53,12 @@ def _earlier(session: Session, owner_id: uuid.UUID, idempotency_key: str, digest
 def create_job(
     session: Session, *, owner_id: uuid.UUID, mesh: tuple[StoredFile, str, str], motion: tuple[StoredFile, str, str] | None,
     options: JobOptions, idempotency_key: str | None, skeleton: tuple[StoredFile, str, str] | None = None,
-    source_job_id: uuid.UUID | None = None,
+    source_job_id: uuid.UUID | None = None, callback_url: str | None = None,
 ) -> tuple[Job, bool]:
     """Record the assets and a queued job; returns (job, created). Same key + same request → the earlier job,
     also when the two requests race (the loser of the unique constraint answers with the winner's job)."""
     digest = request_hash(mesh[0].sha256, motion[0].sha256 if motion else None, options,
-                          skeleton[0].sha256 if skeleton else None, source_job_id)
+                          skeleton[0].sha256 if skeleton else None, source_job_id, callback_url)
     if idempotency_key and (earlier := _earlier(session, owner_id, idempotency_key, digest)) is not None:
         return earlier, False
     mesh_asset = _asset(session, owner_id, *mesh)
@@ -64,7 +68,7 @@ def create_job(
     job = Job(owner_id=owner_id, options=options.model_dump(mode="json"), mesh_asset_id=mesh_asset.id,
               motion_asset_id=motion_asset.id if motion_asset else None,
               skeleton_asset_id=skeleton_asset.id if skeleton_asset else None, source_job_id=source_job_id,
-              idempotency_key=idempotency_key, request_hash=digest)
+              idempotency_key=idempotency_key, request_hash=digest, callback_url=callback_url)
     session.add(job)
     try:
         session.commit()
@@ -80,25 +84,12 @@ def rerun_job(session: Session, *, job: Job) -> Job:
     """A new queued job on the same inputs (mesh, motion, skeleton file) and options as `job`."""
     again = Job(owner_id=job.owner_id, options=dict(job.options), mesh_asset_id=job.mesh_asset_id,
                 motion_asset_id=job.motion_asset_id, skeleton_asset_id=job.skeleton_asset_id,
-                source_job_id=job.source_job_id, idempotency_key=None, request_hash=job.request_hash)
+                source_job_id=job.source_job_id, idempotency_key=None, request_hash=job.request_hash,
+                callback_url=job.callback_url)
     session.add(again)
     session.commit()
     return again
 
-
-def delete_job(session: Session, *, job_id: uuid.UUID, finished: tuple[str, ...]) -> bool:
-    """Delete a job in one of the `finished` statuses with its artifact rows (jobs re-skinned from it lose the
-    link); False, and nothing deleted, when it is queued or running."""
-    session.execute(update(Job).where(Job.source_job_id == job_id).values(source_job_id=None)
-                    .execution_options(synchronize_session=False))
-    session.execute(delete(Artifact).where(Artifact.job_id == job_id).execution_options(synchronize_session=False))
-    gone = rowcount(session.execute(delete(Job).where(Job.id == job_id, Job.status.in_(finished))
-                                    .execution_options(synchronize_session=False))) == 1
-    if gone:
-        session.commit()
-    else:
-        session.rollback()
-    return gone
 
 
 def owned_job(session: Session, *, job_id: uuid.UUID, owner_id: uuid.UUID) -> Job | None:
@@ -136,12 +127,16 @@ def _input(asset: Asset | None) -> InputFile | None:
 def to_schema(job: Job, base_url: str) -> JobOut:
     """The public view of a job; artifact URLs are absolute API paths."""
     error = JobError(code=job.error_code, message=job.error_message or "") if job.error_code and job.status != "succeeded" else None
+    storage, seconds = get_storage(), get_settings().download_url_seconds
     artifacts = [
-        ArtifactOut(name=a.name, media_type=a.media_type, size=a.size, sha256=a.sha256, url=f"{base_url}/api/v1/jobs/{job.id}/artifacts/{a.name}")
+        ArtifactOut(name=a.name, media_type=a.media_type, size=a.size, sha256=a.sha256, url=f"{base_url}/api/v1/jobs/{job.id}/artifacts/{a.name}",
+                    download_url=storage.presigned_url(a.path, a.name, a.media_type, seconds) or base_url + signed_path(job.id, a.name))
         for a in job.artifacts
     ]
     return JobOut(id=job.id, status=job.status, stage=job.stage, progress=job.progress, created_at=job.created_at, started_at=job.started_at,
                   finished_at=job.finished_at, options=job.options, attempts=job.attempts, mesh=_input(job.mesh_asset),
                   motion=_input(job.motion_asset), skeleton=_input(job.skeleton_asset), source_job_id=job.source_job_id,
                   error=error,
-                  warnings=[JobWarning.model_validate(w) for w in job.warnings or []], artifacts=artifacts)
+                  warnings=[JobWarning.model_validate(w) for w in job.warnings or []], artifacts=artifacts,
+                  callback_url=job.callback_url, webhooks=delivery_log(job.deliveries),
+                  download_all_url=base_url + signed_path(job.id, ZIP_NAME) if artifacts else None)

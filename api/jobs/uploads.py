@@ -10,7 +10,7 @@ from fastapi import UploadFile
 
 from api.errors import Problem
 from api.settings import get_settings
-from api.storage import LocalStorage, StoredFile, UploadTooLarge
+from api.storage import Storage, StoredFile, UploadTooLarge
 from simcore.errors import SimcoreError
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_zip import glb_from_zip
@@ -57,26 +57,27 @@ def check_structure(path: Path, fmt: str, *, field: str) -> None:
         slots.release()
 
 
-def store_upload(storage: LocalStorage, upload: UploadFile, *, kind: str, field: str, max_bytes: int) -> tuple[StoredFile, str, str]:
-    """Stream `upload` into storage; returns (stored file, original filename, format). Raises Problem/SimcoreError."""
+def store_upload(storage: Storage, upload: UploadFile, *, kind: str, field: str, max_bytes: int) -> tuple[StoredFile, str, str]:
+    """Stream `upload` into scratch space, check it, keep it; returns (stored file, original filename, format).
+    Raises Problem/SimcoreError."""
     try:
-        stored = storage.save_stream(upload.file, max_bytes)
+        with storage.stage(upload.file, max_bytes) as staged:
+            fmt = upload_format(staged.head, staged.size, kind=kind, field=field)
+            check_structure(staged.path, fmt, field=field)
+            return storage.keep(staged), upload.filename or field, fmt
     except UploadTooLarge:
         raise Problem(413, "upload_too_large", f"'{field}' is larger than {max_bytes // (1024 * 1024)} MB", field=field) from None
-    fmt = upload_format(stored.head, stored.size, kind=kind, field=field)
-    check_structure(stored.path, fmt, field=field)
-    return stored, upload.filename or field, fmt
 
 
-def store_skeleton(storage: LocalStorage, upload: UploadFile, *, max_bytes: int) -> tuple[StoredFile, str, str]:
+def store_skeleton(storage: Storage, upload: UploadFile, *, max_bytes: int) -> tuple[StoredFile, str, str]:
     """Store an edited skeleton.json and check it (simcore.skeleton.skeleton_file; the mesh bounds are checked by
     the worker); returns (stored file, original filename, "json"). Raises Problem/SimcoreError naming `skeleton`."""
     from simcore.skeleton.skeleton_file import MAX_FILE_BYTES, read_skeleton_file
 
     try:
-        stored = storage.save_stream(upload.file, min(max_bytes, MAX_FILE_BYTES))
+        with storage.stage(upload.file, min(max_bytes, MAX_FILE_BYTES)) as staged:
+            read_skeleton_file(staged.path.read_bytes())
+            return storage.keep(staged), upload.filename or "skeleton.json", "json"
     except UploadTooLarge:
         raise Problem(413, "upload_too_large", f"'skeleton' is larger than {MAX_FILE_BYTES // 1024} KB",
                       field="skeleton") from None
-    read_skeleton_file(stored.path.read_bytes())
-    return stored, upload.filename or "skeleton.json", "json"

@@ -57,18 +57,18 @@ def submit_jobs(count: int) -> list[uuid.UUID]:
     from api.jobs.service import create_job
     from api.keys.service import create_key
     from api.queue import enqueue_job
-    from api.settings import get_settings
-    from api.storage import LocalStorage
+    from api.storage import get_storage
     from simcore.options import JobOptions
 
-    storage = LocalStorage(get_settings().storage_dir)
+    storage = get_storage()
     ids = []
     with session_scope() as session:
         owner = create_key(session, name="fault")[0].id
     for k in range(count):
         import io
 
-        stored = storage.save_stream(io.BytesIO(MESH + f"# job {k}\n".encode()), 10**6)
+        with storage.stage(io.BytesIO(MESH + f"# job {k}\n".encode()), 10**6) as staged:
+            stored = storage.keep(staged)
         with session_scope() as session:
             job, _ = create_job(session, owner_id=owner, mesh=(stored, "t.obj", "obj"), motion=None,
                                 options=JobOptions(stages=[]), idempotency_key=None)
