@@ -34,7 +34,12 @@ class RefineOptions(_Strict):
     preset: Literal["flesh", "muscle", "fat", "rubber", "stiff"] = "flesh"
     drivers: Literal["joints", "bones"] = "bones"
     grid: int = Field(64, ge=16, le=128)
-    substeps: int = Field(100, ge=1, le=400, description="substeps per 25 fps frame")
+    substeps: int | None = Field(None, ge=1, le=400, description="at least this many substeps per 25 fps frame "
+                                 "(default: as few as the CFL bounds of the material and the drivers allow)")
+    rate: float = Field(30.0, ge=10, le=60, description="simulation frame rate; output frames at the clip's rate "
+                        "are interpolated between simulated ones")
+    max_offset: float = Field(0.02, ge=0.0, le=0.25, description="farthest a particle may drift from its skinned "
+                              "position, as a fraction of the character's height")
     prototypes: int = Field(25, ge=1, le=200)
     max_particles: int | None = Field(None, ge=1000, le=500_000)
     bone_stiffness: dict[str, float] = Field(default_factory=dict, description="joint name → Young's modulus multiplier")

@@ -156,6 +156,14 @@ def check_refinement(state: PipelineState, judge: _Judge) -> dict[str, Any] | No
           lambda v: f"a vertex moved {v:.2f}× its limb's radius away from its LBS position", tear_frame)
     judge("refine_det_f_clamped_share", fig["det_f_clamped_share"], "refine_det_f_clamped",
           lambda v: f"the solver rejected {100 * v:.3g} % of particle deformation updates (det F out of range)")
+    if "max_volume_change_added" in report:
+        fig["volume_added"] = report["max_volume_change_added"]
+        judge("refine_volume_added", fig["volume_added"], "refine_volume",
+              lambda v: f"refinement changes the enclosed volume by {100 * v:.1f} % of the rest volume more than LBS does")
+    if "max_displacement_from_lbs_heights" in report:
+        fig["offset_heights"] = report["max_displacement_from_lbs_heights"]
+        judge("refine_offset_heights", fig["offset_heights"], "refine_offset",
+              lambda v: f"a vertex moved {v:.3f} character heights away from its LBS position")
     fig.update(_deformation(judge, series, "refine_"))
     return fig
 

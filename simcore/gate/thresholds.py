@@ -23,6 +23,12 @@ ROW_SUM_TOLERANCE = 8 * 2.0 ** -23
 # as a thin part (an ear, a tail tip) can swing that far without harm; a tear also stretches edges past the
 # artists' envelope, which fails.
 TEAR_RADII = 1.0
+# Refinement may change the enclosed volume by at most 3 % of the rest volume beyond what LBS already does.
+REFINE_VOLUME_ADDED = 0.03
+# Offset from LBS in character heights: the tether holds particles within options.refine.max_offset (default
+# 0.02); past 0.05 is worth a look, past the option's ceiling (0.25) something escaped the tether.
+REFINE_OFFSET_WARN = 0.05
+REFINE_OFFSET_FAIL = 0.25
 
 
 @dataclass(frozen=True)
@@ -56,6 +62,8 @@ def _fixed() -> dict[str, Threshold]:
         "refine_non_finite_vertices": Threshold("above", 0, 0),
         "refine_tear_radii": Threshold("above", TEAR_RADII, None),
         "refine_det_f_clamped_share": Threshold("above", 0, None),
+        "refine_volume_added": Threshold("above", REFINE_VOLUME_ADDED, REFINE_VOLUME_ADDED),
+        "refine_offset_heights": Threshold("above", REFINE_OFFSET_WARN, REFINE_OFFSET_FAIL),
     }
 
 

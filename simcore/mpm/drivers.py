@@ -98,11 +98,11 @@ def animation_world_transforms(skeleton: Skeleton, animation: JointAnimation) ->
 
 
 def _slerp(qa: np.ndarray, qb: np.ndarray, alphas: np.ndarray) -> np.ndarray:
-    """(K, J, 4) quaternions between qa and qb (J, 4) xyzw at fractions alphas (K,), shortest arc."""
+    """(K, J, 4) quaternions between qa and qb (J, 4) xyzw at fractions alphas (K,) or (K, J), shortest arc."""
     qb = np.where(np.sum(qa * qb, axis=1, keepdims=True) < 0, -qb, qb)
     cos = np.clip(np.sum(qa * qb, axis=1), -1.0, 1.0)[None, :, None]
     theta = np.arccos(cos)
-    a = alphas[:, None, None]
+    a = alphas[:, :, None] if alphas.ndim == 2 else alphas[:, None, None]
     sin = np.sin(theta)
     small = sin < 1e-6  # nearly equal: linear blend is exact to float precision
     wa = np.where(small, 1.0 - a, np.sin((1.0 - a) * theta) / np.where(small, 1.0, sin))
@@ -112,14 +112,16 @@ def _slerp(qa: np.ndarray, qb: np.ndarray, alphas: np.ndarray) -> np.ndarray:
 
 
 def interpolate_transforms(world_a: np.ndarray, world_b: np.ndarray, alphas: np.ndarray) -> np.ndarray:
-    """(K, J, 4, 4) rigid transforms between world_a and world_b (J, 4, 4) at alphas (K,) in [0, 1]."""
+    """(K, J, 4, 4) rigid transforms between world_a and world_b (J, 4, 4) at alphas (K,) or per joint (K, J),
+    in [0, 1]."""
     qa = Rotation.from_matrix(world_a[:, :3, :3]).as_quat()
     qb = Rotation.from_matrix(world_b[:, :3, :3]).as_quat()
     q = _slerp(qa, qb, np.asarray(alphas, dtype=np.float64))
     k, j = q.shape[:2]
     out = np.zeros((k, j, 4, 4))
     out[:, :, :3, :3] = Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(k, j, 3, 3)
-    a = np.asarray(alphas)[:, None, None]
+    a = np.asarray(alphas)
+    a = a[:, :, None] if a.ndim == 2 else a[:, None, None]
     out[:, :, :3, 3] = (1.0 - a) * world_a[None, :, :3, 3] + a * world_b[None, :, :3, 3]
     out[:, :, 3, 3] = 1.0
     return out

@@ -336,6 +336,44 @@ def g2p(
 
 
 @wp.kernel
+def tether(
+    rest: wp.array(dtype=wp.vec3),
+    joints: wp.array(dtype=wp.vec4i),
+    weights: wp.array(dtype=wp.vec4),
+    skin: wp.array(dtype=wp.mat44),
+    prev: int,
+    cur: int,
+    dt: float,
+    radius: float,
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    count: wp.array(dtype=wp.int32),
+):
+    """Max-distance constraint: keep each particle within `radius` of its skinned (LBS) position.
+
+    skin holds joint skinning matrices (column-vector 4x4) per substep boundary; `prev` and `cur` are the flat
+    offsets of the substep's start and end sets. A particle past the radius is put back on the sphere and loses
+    the outward part of its velocity relative to the skinned target's. Forward only (refinement, not the fit).
+    """
+    p = wp.tid()
+    r = rest[p]
+    target = wp.vec3(0.0)
+    before = wp.vec3(0.0)
+    for i in range(4):
+        target = target + weights[p][i] * wp.transform_point(skin[cur + joints[p][i]], r)
+        before = before + weights[p][i] * wp.transform_point(skin[prev + joints[p][i]], r)
+    d = x[p] - target
+    length = wp.length(d)
+    if length > radius:
+        normal = d / length
+        x[p] = target + normal * radius
+        outward = wp.dot(v[p] - (target - before) / dt, normal)
+        if outward > 0.0:
+            v[p] = v[p] - normal * outward
+        wp.atomic_add(count, 0, 1)
+
+
+@wp.kernel
 def clear_blocks(
     active: wp.array(dtype=wp.int32),
     n: int,

@@ -1,4 +1,5 @@
-"""Forward PhysRig refinement of an animated character: simulate, read back the mesh vertices per frame, report."""
+"""Forward PhysRig refinement of an animated character: simulate at the key rate, interpolate to the clip's
+frames, report stability figures (volume, offset from LBS, clamps) and the time estimate made before the run."""
 
 from __future__ import annotations
 
@@ -15,7 +16,12 @@ from simcore.mpm.measures import signed_volumes
 from simcore.mpm.sampling import nearest_rows
 from simcore.mpm.scene import CharacterScene, build_scene, particle_budget
 from simcore.options import RefineOptions
+from simcore.skeleton.kinematics import skinning_matrices
 from simcore.skeleton.types import Skeleton
+from simcore.skinning.lbs import linear_blend
+
+PROBE_SUBSTEPS = 3  # timed substeps (after one untimed) behind the estimate
+VOLUME_BLOCK = 16  # frames per block of volume measurement
 
 
 @dataclass
@@ -27,103 +33,162 @@ class RefineResult:
     notes: list[str] = field(default_factory=list)
 
 
-def _fill_unsimulated(frames: np.ndarray, lbs: np.ndarray, vertices: np.ndarray, vertex_particles: np.ndarray) -> None:
-    """Vertices thinned by the budget take the LBS→refined displacement of their nearest simulated vertices."""
+def _fill_unsimulated(offsets: np.ndarray, vertices: np.ndarray, vertex_particles: np.ndarray) -> None:
+    """Vertices thinned by the budget take the offsets (K, V, 3) of their nearest simulated vertices."""
     missing = vertex_particles < 0
     if not missing.any():
         return
     blend = nearest_rows(vertices[~missing], sp.identity(int((~missing).sum()), format="csr"), vertices[missing])
-    for t in range(len(frames)):
-        offset = frames[t, ~missing] - lbs[t, ~missing]
-        frames[t, missing] = lbs[t, missing] + blend @ offset
+    for k in range(len(offsets)):
+        offsets[k, missing] = blend @ offsets[k, ~missing]
+
+
+def interpolate_offsets(offsets: np.ndarray, key_times: np.ndarray, frame_times: np.ndarray) -> np.ndarray:
+    """(T, V, 3) offsets at frame_times (s) by linear interpolation of key offsets (K, V, 3) at key_times (K,)."""
+    f = np.interp(frame_times, key_times, np.arange(len(key_times)))
+    lo = np.floor(f).astype(int)
+    hi = np.minimum(lo + 1, len(key_times) - 1)
+    a = (f - lo).astype(np.float32)[:, None, None]
+    return (1.0 - a) * offsets[lo] + a * offsets[hi]
+
+
+def estimate_seconds(ms_per_substep: float, scene: CharacterScene) -> float:
+    """Simulation time the run should take at the probed speed."""
+    return ms_per_substep * 1e-3 * scene.total_substeps()
 
 
 def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, weights: sp.csr_matrix,
                      animation: JointAnimation, opts: RefineOptions, *,
                      progress: Callable[[float], None] = lambda f: None,
                      check_cancel: Callable[[], None] = lambda: None,
+                     on_estimate: Callable[[dict[str, Any]], None] = lambda e: None,
                      device: str | None = None, seed: int = 0) -> RefineResult:
     """Simulate the character's volume driven by its animated skeleton.
 
     vertices: (V, 3) float bind pose, metres; faces: (F, 3) int; weights: (V, J) rows summing to 1.
-    Returns refined positions for every animation frame (frame 0 after `opts.preroll_frames` of easing in).
+    Returns refined positions for every animation frame (frame 0 after `opts.preroll_frames` keys of easing in).
+    on_estimate receives {"substeps", "ms_per_substep", "estimate_s"} before the simulation starts.
     """
     import warp as wp
 
     from simcore.mpm.simulate import DeviceDrive, advance_frame
-    from simcore.mpm.solver import MPMSolver, warp_device
+    from simcore.mpm.solver import MPMSolver, Tether, warp_device
 
+    vertices = np.asarray(vertices, np.float64)
+    faces = np.asarray(faces, np.int64)
     dev = warp_device(device)
     budget, budget_source = particle_budget(opts.max_particles, dev)
     started = time.perf_counter()
-    scene: CharacterScene = build_scene(np.asarray(vertices, np.float64), np.asarray(faces, np.int64), skeleton,
-                                        sp.csr_matrix(weights), animation, opts, device=dev, max_particles=budget, seed=seed)
-    setup_s = time.perf_counter() - started
+    scene = build_scene(vertices, faces, skeleton, sp.csr_matrix(weights), animation, opts, device=dev,
+                        max_particles=budget, seed=seed)
     s = scene.sample
     solver = MPMSolver(s.count, scene.grid, scene.dx, scene.density * s.particle_volume, s.particle_volume, device=dev,
                        bound=3)
     a, b = solver.new_state(s.positions), solver.new_state()
     mu = wp.array(scene.mu, dtype=float, device=dev)
     lam = wp.array(scene.lam, dtype=float, device=dev)
+    tether = None
+    if scene.tether_radius > 0:
+        tether = Tether(wp.array(s.positions.astype(np.float32), dtype=wp.vec3, device=dev),
+                        wp.array(scene.skin_joints, dtype=wp.vec4i, device=dev),
+                        wp.array(scene.skin_weights, dtype=wp.vec4, device=dev),
+                        wp.zeros(1, dtype=wp.mat44, device=dev), 0, scene.tether_radius,
+                        wp.zeros(1, dtype=wp.int32, device=dev))
+    setup_s = time.perf_counter() - started
+
+    # Estimate: time a few substeps of the first interval on a scratch state (the first run compiles/loads).
+    probe = DeviceDrive(scene.plan(0), dev, tether=tether)
+    pa, pb = solver.new_state(s.positions), solver.new_state()
+    solver.substep(pa, pb, probe.inputs(0, mu, lam))
+    wp.synchronize_device(dev)
+    t0 = time.perf_counter()
+    for k in range(PROBE_SUBSTEPS):
+        solver.substep(pb if k % 2 == 0 else pa, pa if k % 2 == 0 else pb, probe.inputs(0, mu, lam))
+    wp.synchronize_device(dev)
+    probe_ms = 1e3 * (time.perf_counter() - t0) / PROBE_SUBSTEPS
+    solver.take_clamp_counts()
+    if tether is not None:
+        tether.count.zero_()
+    estimate = {"substeps": scene.total_substeps(), "ms_per_substep": round(probe_ms, 3),
+                "estimate_s": round(estimate_seconds(probe_ms, scene), 1)}
+    on_estimate(estimate)
+
     vp = s.vertex_particles
-    t_frames = animation.num_frames
-    plans = scene.preroll_plans(opts.preroll_frames)
-    total = len(plans) + t_frames - 1
-    out = np.empty((t_frames, len(vertices), 3), np.float32)
-    det_dev, clamps = [], [0, 0]
+    keys = len(scene.keys)
+    outputs = keys - scene.first_output
+    sim = np.empty((outputs, len(vertices), 3), np.float32)
+    det_dev, clamps, tethered = [], [0, 0], 0
     sim_started = time.perf_counter()
     substeps_run = 0
 
-    def step(plan) -> None:
-        nonlocal a, b, substeps_run
+    def record(k: int) -> None:
+        i = k - scene.first_output
+        if i >= 0:
+            sim[i, vp >= 0] = a.x.numpy()[vp[vp >= 0]]
+            det_dev.append(solver.mean_det_deviation(a))
+
+    record(0)
+    for k in range(keys - 1):
         check_cancel()
-        a, b = advance_frame(solver, a, b, DeviceDrive(plan, dev), mu, lam)
+        plan = scene.plan(k)
+        a, b = advance_frame(solver, a, b, DeviceDrive(plan, dev, tether=tether), mu, lam)
         substeps_run += plan.substeps
         v, d = solver.take_clamp_counts()
         clamps[0] += v
         clamps[1] += d
-
-    for i, plan in enumerate(plans):
-        step(plan)
-        progress((i + 1) / max(total, 1))
-
-    def record(t: int) -> None:
-        x = a.x.numpy()
-        out[t, vp >= 0] = x[vp[vp >= 0]]
-        det_dev.append(solver.mean_det_deviation(a))
-
-    record(0)
-    for t in range(t_frames - 1):
-        step(scene.frame_plan(t))
-        record(t + 1)
-        progress((len(plans) + t + 1) / max(total, 1))
+        record(k + 1)
+        progress((k + 1) / max(keys - 1, 1))
     sim_s = time.perf_counter() - sim_started
+    if tether is not None:
+        tethered = int(tether.count.numpy()[0])
 
-    lbs = scene.lbs.astype(np.float32)
-    _fill_unsimulated(out, lbs, np.asarray(vertices, np.float64), vp)
-    bad = ~np.isfinite(out)
+    key_world = scene.world[scene.first_output:]
+    w = sp.csr_matrix(weights)
+    lbs_keys = np.empty_like(sim)
+    for start in range(0, outputs, VOLUME_BLOCK):
+        lbs_keys[start:start + VOLUME_BLOCK] = linear_blend(vertices, w, key_world[start:start + VOLUME_BLOCK] @ scene.inv_bind[None])
+    offsets = sim - lbs_keys
+    _fill_unsimulated(offsets, vertices, vp)
+    bad = ~np.isfinite(offsets)
     nan_replaced = int(bad.any(axis=2).sum())
-    if nan_replaced:  # never hand a NaN to the exporters: fall back to LBS there and say so
-        out[bad] = lbs[bad]
-    report = _report(scene, out, lbs, np.asarray(vertices, np.float64), faces)
+    if nan_replaced:  # never hand a NaN to the exporters: no offset there (LBS) and say so
+        offsets[bad] = 0.0
+    from simcore.mpm.drivers import animation_world_transforms
+
+    frame_times = np.arange(animation.num_frames) / float(animation.fps)
+    mats = skinning_matrices(skeleton, animation_world_transforms(skeleton, animation))
+    out = np.empty((animation.num_frames, len(vertices), 3), np.float32)
+    key_times = scene.keys[scene.first_output:]
+    for start in range(0, animation.num_frames, VOLUME_BLOCK):
+        block = slice(start, start + VOLUME_BLOCK)
+        out[block] = linear_blend(vertices, w, mats[block]) + interpolate_offsets(offsets, key_times, frame_times[block])
+    report = _report(scene, lbs_keys + offsets, lbs_keys, vertices, faces)
     report.update({
         "particle_budget": budget, "particle_budget_source": budget_source, "device": dev,
-        "setup_s": round(setup_s, 3), "simulation_s": round(sim_s, 3),
-        "substeps_run": substeps_run, "preroll_frames": len(plans),
+        "setup_s": round(setup_s, 3), "simulation_s": round(sim_s, 3), **{f"estimate_{k}": v for k, v in estimate.items()},
+        "substeps_run": substeps_run, "preroll_frames": scene.first_output,
         "ms_per_substep": round(1e3 * sim_s / max(substeps_run, 1), 3),
         "particle_substeps_per_s": round(s.count * substeps_run / max(sim_s, 1e-9)),
         "mean_abs_det_f_minus_1": [round(x, 6) for x in det_dev],
-        "clamped": {"velocity": clamps[0], "det_f": clamps[1], "non_finite_vertices_replaced_by_lbs": nan_replaced},
+        "clamped": {"velocity": clamps[0], "det_f": clamps[1], "tethered": tethered,
+                    "non_finite_vertices_replaced_by_lbs": nan_replaced},
     })
     return RefineResult(out, report, list(scene.info.get("notes", [])))
 
 
+def _volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    return np.concatenate([signed_volumes(frames[i:i + VOLUME_BLOCK], faces) for i in range(0, len(frames), VOLUME_BLOCK)])
+
+
 def _report(scene: CharacterScene, refined: np.ndarray, lbs: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> dict:
+    """Figures at the simulated keys on the clip: volume / rest volume, offsets from LBS."""
     rest = float(signed_volumes(vertices, faces)[0])
     safe = rest if abs(rest) > 1e-12 else 1.0
-    vol_lbs = signed_volumes(lbs, faces) / safe
-    vol_ref = signed_volumes(refined, faces) / safe
-    disp = np.linalg.norm(refined - lbs, axis=2)  # (T, V)
+    vol_lbs = _volumes(lbs, faces) / safe
+    vol_ref = _volumes(refined, faces) / safe
+    disp = np.linalg.norm(refined - lbs, axis=2)  # (K, V)
+    # volume change refinement adds beyond LBS's own, per key (≤ 0 where it keeps volume better than LBS)
+    added = np.abs(vol_ref - 1.0) - np.abs(vol_lbs - 1.0)
     return {
         **scene.info,
         "frames": int(len(refined)),
@@ -132,6 +197,8 @@ def _report(scene: CharacterScene, refined: np.ndarray, lbs: np.ndarray, vertice
         "volume_ratio_refined": [round(float(x), 5) for x in vol_ref],
         "max_volume_change_lbs": round(float(np.max(np.abs(vol_lbs - 1.0))), 5),
         "max_volume_change_refined": round(float(np.max(np.abs(vol_ref - 1.0))), 5),
+        "max_volume_change_added": round(float(np.max(added)), 5),
         "max_displacement_from_lbs_m": round(float(disp.max()), 6),
+        "max_displacement_from_lbs_heights": round(float(disp.max()) / max(scene.height, 1e-12), 6),
         "mean_displacement_from_lbs_m": [round(float(x), 6) for x in disp.mean(axis=1)],
     }

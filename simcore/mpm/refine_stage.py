@@ -28,8 +28,12 @@ def run(state: PipelineState, progress: StageProgress) -> None:
                            field="refine.enabled")
     from simcore.mpm.refine import refine_character
 
+    def on_estimate(estimate: dict) -> None:
+        # Written before the simulation starts, so a report read mid-run (or after a cancel) has it.
+        state.report["refine"] = {"estimate": estimate}
+
     result = refine_character(state.mesh.vertices, state.mesh.faces, state.skeleton, state.weights, state.animation,
-                              opts, progress=progress, check_cancel=progress.check_cancel)
+                              opts, progress=progress, check_cancel=progress.check_cancel, on_estimate=on_estimate)
     state.refined_frames = result.frames
     state.report["refine"] = result.report
     for note in result.notes:

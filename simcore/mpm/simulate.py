@@ -8,12 +8,13 @@ Memory: (frames + substeps + 2) particle states, never a grid per substep.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 import warp as wp
 
-from simcore.mpm.solver import MPMSolver, ParticleState, SubstepInputs
+from simcore.mpm.solver import MPMSolver, ParticleState, SubstepInputs, Tether
 
 
 @dataclass
@@ -21,13 +22,15 @@ class FramePlan:
     """One frame interval.
 
     dt: substep length, s; origins: (n, 3) float grid origin per substep (the grid follows the body);
-    dp, dv: (n, D, 3) float32 driver positions and velocities per substep (D may be 0).
+    dp, dv: (n, D, 3) float32 driver positions and velocities per substep (D may be 0);
+    skin: (n + 1, J, 4, 4) skinning matrices at the substep boundaries, for the tether (None: no tether).
     """
 
     dt: float
     origins: np.ndarray
     dp: np.ndarray
     dv: np.ndarray
+    skin: np.ndarray | None = None
 
     @property
     def substeps(self) -> int:
@@ -37,8 +40,12 @@ class FramePlan:
 class DeviceDrive:
     """A FramePlan's driver arrays on the solver's device: dp, dv (n, D) vec3 (dv optionally with gradient)."""
 
-    def __init__(self, plan: FramePlan, device: str, requires_grad: bool = False) -> None:
+    def __init__(self, plan: FramePlan, device: str, requires_grad: bool = False, tether: Tether | None = None) -> None:
         self.plan = plan
+        self.tether = None
+        if tether is not None and plan.skin is not None:
+            skin = wp.array(np.ascontiguousarray(plan.skin, np.float32).reshape(-1, 4, 4), dtype=wp.mat44, device=device)
+            self.tether = dataclasses.replace(tether, skin=skin, num_joints=int(plan.skin.shape[1]))
         d = plan.dp.shape[1] if plan.dp.ndim == 3 else 0
         self.has_drivers = d > 0
         if self.has_drivers:
@@ -50,8 +57,8 @@ class DeviceDrive:
         o = self.plan.origins[k]
         origin = (float(o[0]), float(o[1]), float(o[2]))
         if not self.has_drivers:
-            return SubstepInputs(mu, lam, origin, self.plan.dt)
-        return SubstepInputs(mu, lam, origin, self.plan.dt, self.dp[k], self.dv[k])
+            return SubstepInputs(mu, lam, origin, self.plan.dt, tether=self.tether, tether_step=k)
+        return SubstepInputs(mu, lam, origin, self.plan.dt, self.dp[k], self.dv[k], tether=self.tether, tether_step=k)
 
 
 def advance_frame(solver: MPMSolver, a: ParticleState, b: ParticleState, drive: DeviceDrive,

@@ -55,6 +55,26 @@ class SubstepInputs:
     dt: float
     dp: wp.array | None = None
     dv: wp.array | None = None
+    tether: Tether | None = None
+    tether_step: int = 0  # this substep's index into the tether's skinning sets
+
+
+@dataclass
+class Tether:
+    """Max-distance constraint to the skinned pose (forward only, see kernels.tether).
+
+    rest: (N,) vec3 bind positions; joints, weights: (N,) vec4i / vec4 four skinning influences per particle;
+    skin: ((S + 1) · J,) mat44 skinning matrices at the S + 1 substep boundaries of a frame interval;
+    radius: metres; count: (1,) int32 particles put back since the last read.
+    """
+
+    rest: wp.array
+    joints: wp.array
+    weights: wp.array
+    skin: wp.array
+    num_joints: int
+    radius: float
+    count: wp.array
 
 
 MAX_CPU_THREADS = 8  # particle passes split over at most this many cores
@@ -213,6 +233,11 @@ class MPMSolver:
         self._prepare_blocks(s_in, inp)
         self._transfer(s_in, s_out, inp)
         self._clear(with_grads=False)
+        t = inp.tether
+        if t is not None:
+            k = inp.tether_step * t.num_joints
+            wp.launch(K.tether, dim=self.num_particles, device=self.device, inputs=[
+                t.rest, t.joints, t.weights, t.skin, k, k + t.num_joints, inp.dt, t.radius, s_out.x, s_out.v, t.count])
 
     def backward_substep(self, s_in: ParticleState, s_out: ParticleState, inp: SubstepInputs) -> None:
         """Accumulate s_in.grad (and mu/lam/dv grads) from s_out.grad, recomputing the grid of this substep.

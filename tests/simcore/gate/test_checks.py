@@ -94,14 +94,14 @@ def test_a_collapse_in_one_frame_of_the_clip_fails_the_motion_stage(tmp_path):
     assert state.report["quality"]["motion"]["stretch_low_frame"] == 3
 
 
-def test_refinement_torn_by_a_driver_spike_is_flagged(tmp_path):
+def test_refinement_survives_a_driver_spike(tmp_path):
     from simcore.mpm import refine_stage
     from simcore.options import RefineOptions
     from simcore.pipeline import StageProgress
 
     def refine(spike: float) -> PipelineState:
         state = rig_state(tmp_path, "warn", bend=30.0)
-        state.options = JobOptions(quality_gate="warn", refine=RefineOptions(enabled=True, grid=32, preroll_frames=1, substeps=20))
+        state.options = JobOptions(quality_gate="warn", refine=RefineOptions(enabled=True, grid=32, preroll_frames=1))
         assert state.animation is not None
         state.animation.translations[3, 0, 0] += spike  # the root jumps `spike` m for one frame (50 m/s at 2 m)
         state.stage = "refine"
@@ -110,13 +110,33 @@ def test_refinement_torn_by_a_driver_spike_is_flagged(tmp_path):
 
     calm = refine(0.0)
     assert run_checks(calm, "refine") == {} and calm.report["quality"]["refine"]["tear_radii"] < 1.0
-    torn = refine(2.0)
-    codes = run_checks(torn, "refine")
-    assert codes["refine_tear"]["frame"] == 3 and codes["refine_tear"]["figure"] > 1.0
-    assert codes["refine_edge_stretch"]["hard"] and codes["refine_edge_stretch"]["frame"] == 3
-    torn.options = JobOptions(quality_gate="fail")
+    spiked = refine(2.0)  # drivers are speed-limited and the tether holds the flesh near the skinned pose
+    codes = run_checks(spiked, "refine")
+    assert not [c for c in codes.values() if c["hard"]], codes
+    assert spiked.report["refine"]["driver_steps_capped"] > 0
+    assert spiked.report["quality"]["refine"]["offset_heights"] <= RefineOptions().max_offset * 1.05
+
+
+def _refined_state(tmp_path, offset: float, volume_added: float) -> PipelineState:
+    state = rig_state(tmp_path, "warn")
+    assert state.mesh is not None and state.animation is not None
+    state.animation.rotations[:] = [0, 0, 0, 1]
+    state.refined_frames = np.stack([state.mesh.vertices.astype(np.float32)] * 6)
+    state.refined_frames[3, 0, 0] += offset
+    state.report["refine"] = {"clamped": {"non_finite_vertices_replaced_by_lbs": 0, "det_f": 0}, "particles": 100,
+                              "substeps_run": 10, "max_volume_change_added": volume_added,
+                              "max_displacement_from_lbs_heights": offset}
+    return state
+
+
+def test_refinement_offset_and_volume_past_their_bounds_fail(tmp_path):
+    assert run_checks(_refined_state(tmp_path, 0.01, 0.0), "refine") == {}
+    codes = run_checks(_refined_state(tmp_path, 0.3, 0.05), "refine")
+    assert codes["refine_offset"]["hard"] and codes["refine_volume"]["hard"]
+    state = _refined_state(tmp_path, 0.3, 0.0)
+    state.options = JobOptions(quality_gate="fail")
     with pytest.raises(QualityGateFailed):
-        check_stage("refine", torn)
+        check_stage("refine", state)
 
 
 def test_refinement_nan_is_a_hard_failure(tmp_path):

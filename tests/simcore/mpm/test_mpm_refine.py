@@ -5,6 +5,7 @@ from simcore.errors import Canceled
 from simcore.geometry.mesh import IngestedMesh
 from simcore.options import JobOptions, RefineOptions
 from simcore.pipeline import PipelineInputs, PipelineState, StageProgress
+from tests.simcore.mpm.conftest import capsule_rig
 
 
 def _refine(capsule, opts, **rig):
@@ -32,8 +33,15 @@ def test_violent_drive_never_produces_nan(capsule):
     vertices, result = _refine(capsule, opts, bend_degrees=720.0, frames=4, root_speed=20.0)
     assert np.all(np.isfinite(result.frames))
     assert result.report["clamped"]["non_finite_vertices_replaced_by_lbs"] == 0
-    # the CFL bounds, not the requested 20 substeps, set the step for this motion
-    assert result.report["substeps_per_frame"] > 20
+    report = result.report
+    # the CFL bounds, not the requested floor of 20 substeps per 25 fps frame, set the step for this motion
+    assert report["dt_s"] < report["dt_limits_s"]["floor"]
+    # the 20 m/s root is capped at the driver speed limit, and the tether bounds the offset from LBS
+    assert report["driver_steps_capped"] > 0
+    assert report["max_driver_speed_m_s"] <= report["driver_speed_limit_m_s"] * 1.02
+    assert report["max_driver_speed_unlimited_m_s"] > report["driver_speed_limit_m_s"]
+    assert report["max_displacement_from_lbs_heights"] <= opts.max_offset * 1.05
+    assert report["estimate_estimate_s"] > 0 and report["estimate_substeps"] == report["substeps_run"]
 
 
 def test_refine_stage_sets_frames_and_reports_volume(capsule, tmp_path):
@@ -47,7 +55,8 @@ def test_refine_stage_sets_frames_and_reports_volume(capsule, tmp_path):
     refine_stage.run(state, StageProgress("refine", 0.0, 1.0, lambda name, f: seen.append(f), lambda: None))
     report = state.report["refine"]
     assert state.refined_frames is not None and state.refined_frames.shape == (6, len(vertices), 3)
-    assert len(report["volume_ratio_lbs"]) == len(report["volume_ratio_refined"]) == 6
+    # figures at the simulated keys: 30 fps over the clip's 0.2 s
+    assert len(report["volume_ratio_lbs"]) == len(report["volume_ratio_refined"]) == report["frames"] == 7
     # LBS collapses the bent joint; the simulated volume keeps more of it
     assert report["max_volume_change_refined"] < report["max_volume_change_lbs"]
     assert 0 < report["max_displacement_from_lbs_m"] < 0.2
@@ -79,3 +88,39 @@ def test_refine_stage_skips_without_animation(capsule, tmp_path):
     state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"), JobOptions(refine=RefineOptions(enabled=True)), tmp_path)
     refine_stage.run(state, StageProgress("refine", 0.0, 1.0, lambda name, f: None, lambda: None))
     assert "skipped" in state.report["refine"] and state.report["warnings"]
+
+
+def test_keys_follow_the_rate_and_end_on_the_last_frame():
+    from simcore.mpm.scene import key_times
+
+    times = key_times(frames=121, fps=120.0, rate=30.0)  # 1 s of clip
+    assert len(times) == 31 and times[-1] == pytest.approx(1.0)
+    odd = key_times(frames=10, fps=120.0, rate=30.0)  # 0.075 s: keys at 0, 1/30, 2/30 and the end
+    assert odd.tolist() == pytest.approx([0.0, 1 / 30, 2 / 30, 0.075])
+
+
+def test_joints_are_speed_limited_and_catch_up():
+    from simcore.mpm.drivers import driver_positions
+    from simcore.mpm.scene import limit_world
+
+    vertices, faces, skeleton, weights, animation = capsule_rig()
+    from simcore.mpm.drivers import place_drivers
+
+    drivers = place_drivers(skeleton, "joints", 0.05)
+    times = np.arange(8) / 10.0
+    world = np.tile(np.eye(4), (8, 3, 1, 1))
+    world[:, :, :3, 3] = skeleton.positions
+    world[3:, :, 0, 3] += 1.0  # every joint pops 1 m between keys 2 and 3, then stays
+    out, capped = limit_world(world, drivers, times, limit=4.0)
+    paths = driver_positions(drivers, out)
+    speeds = np.linalg.norm(np.diff(paths, axis=0), axis=2) / 0.1
+    assert speeds.max() <= 4.0 * 1.02 and capped > 0  # slerp: chord vs arc
+    assert np.allclose(out[-1], world[-1])  # it catches up once the skeleton stops
+
+
+def test_offsets_interpolate_between_keys():
+    from simcore.mpm.refine import interpolate_offsets
+
+    offsets = np.array([[[0.0, 0, 0]], [[1.0, 0, 0]]], np.float32)
+    got = interpolate_offsets(offsets, np.array([0.0, 0.1]), np.array([0.0, 0.025, 0.1]))
+    assert got[:, 0, 0].tolist() == pytest.approx([0.0, 0.25, 1.0])
