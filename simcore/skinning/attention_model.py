@@ -70,11 +70,29 @@ class SkinAttention(nn.Module):
         wp, wb, wq = first.weight.split([PAIR_FEATURES, w, w], dim=1)
         pre = pair @ wp.T + (bones @ wb.T)[candidates] + (p @ wq.T + first.bias)[:, None, :]
         h = self.pair_in[1:](pre)  # (V, K, w)
-        context, _ = self.cross(p[:, None, :], h, h, need_weights=False)  # (V, 1, w)
+        context = self._attend(p, h)[:, None, :]  # (V, 1, w)
         z = self.norm(h + context)
         top = cast(nn.Linear, self.out[0])
         wz, wc = top.weight.split([w, w], dim=1)
         return self.out[1:](z @ wz.T + (context @ wc.T + top.bias))[..., 0] + self.prior_scale * prior
+
+    def _attend(self, query: torch.Tensor, pairs: torch.Tensor) -> torch.Tensor:
+        """`self.cross` for one query per vertex over its K pairs: (V, w), (V, K, w) → (V, w).
+
+        The key and value projections are moved off the pairs: q·(Wk h) = (Wkᵀ q)·h, and since the attention
+        weights sum to 1, Σ a (Wv h + bv) = Wv (Σ a h) + bv. Same result as nn.MultiheadAttention, without its two
+        (V·K, w) × (w, w) products. The key bias shifts every score of a head equally and cancels in the softmax.
+        """
+        heads, w = self.config.heads, self.config.width
+        d = w // heads
+        wq, wk, wv = self.cross.in_proj_weight.split(w)
+        bq, _, bv = self.cross.in_proj_bias.split(w)
+        q = (query @ wq.T + bq).view(-1, heads, d)  # (V, H, d)
+        u = torch.einsum("vhd,hdw->vhw", q, wk.view(heads, d, w)) / d**0.5  # (V, H, w)
+        attn = torch.softmax(torch.einsum("vhw,vkw->vhk", u, pairs), dim=-1)
+        mixed = torch.einsum("vhk,vkw->vhw", attn, pairs)  # (V, H, w)
+        values = torch.einsum("vhw,hdw->vhd", mixed, wv.view(heads, d, w)).reshape(-1, w) + bv
+        return cast(torch.Tensor, self.cross.out_proj(values))
 
     def forward(self, pair: torch.Tensor, bone: torch.Tensor, point: torch.Tensor, candidates: torch.Tensor,
                 prior: torch.Tensor) -> torch.Tensor:

@@ -20,7 +20,8 @@ from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.skinning.pair_features import skin_inputs
 
 WEIGHTS = Path(__file__).parent / "weights" / "skin_attention.safetensors"
-CHUNK = 8192  # vertices per forward pass: bounds the (chunk, K, width) activations
+CHUNK = 512  # vertices per forward pass: the (chunk, K, width) activations stay in the CPU cache
+PROGRESS_EVERY = 16  # chunks between progress reports
 
 
 def learned_summary(path: Path = WEIGHTS) -> str:
@@ -53,5 +54,7 @@ def learned_weights(
             logits = model.logits(torch.from_numpy(inputs.pair[rows]), bones, torch.from_numpy(inputs.point[rows]), cand,
                                   torch.from_numpy(inputs.prior[rows]))
             np.put_along_axis(out[rows], inputs.candidates[rows], torch.softmax(logits, dim=-1).double().numpy(), axis=1)
-            progress(0.7 + 0.3 * min(1.0, (start + CHUNK) / len(out)))
+            if (start // CHUNK) % PROGRESS_EVERY == 0:
+                progress(0.7 + 0.3 * min(1.0, (start + CHUNK) / len(out)))
+    progress(1.0)
     return out

@@ -154,13 +154,14 @@ def skin_inputs(
     facing = np.einsum("vkc,vc->vk", towards, normals) / np.maximum(np.linalg.norm(towards, axis=2), 1e-9)
     g0, e0 = g[:, :1], e.min(axis=1, keepdims=True)
     island_pair, island_point = island_features((v - centre) / side, islands(v, faces), geo, cand)
-    pair = np.concatenate([
-        np.stack([g, e, g - g0, np.log((g + EPS) / (g0 + EPS)), np.log((e + EPS) / (e0 + EPS)), a,
-                  np.maximum(prior, -30.0) / 30.0, np.broadcast_to(np.arange(k) / max(k - 1, 1), g.shape),
-                  facing, e - e0], axis=-1),
-        _relations(skeleton.parents, cand), island_pair,
-    ], axis=-1)
+    columns = [g, e, g - g0, np.log((g + EPS) / (g0 + EPS)), np.log((e + EPS) / (e0 + EPS)), a,
+               np.maximum(prior, -30.0) / 30.0, np.broadcast_to(np.arange(k) / max(k - 1, 1), g.shape), facing, e - e0]
+    pair = np.empty((len(v), k, PAIR_FEATURES), np.float32)  # filled column by column: no float64 (V, K, P) copy
+    for c, column in enumerate(columns):
+        pair[..., c] = column
+    pair[..., len(columns):len(columns) + 5] = _relations(skeleton.parents, cand)
+    pair[..., len(columns) + 5:] = island_pair
     point = np.column_stack([(v - centre) / side, normals, g0, e0, island_point])
     progress(1.0)
-    return SkinInputs(cand, pair.astype(np.float32), bone_features(skeleton, centre, side), point.astype(np.float32),
+    return SkinInputs(cand, pair, bone_features(skeleton, centre, side), point.astype(np.float32),
                       prior.astype(np.float32))
