@@ -122,6 +122,7 @@ class Job(Base):
     artifacts: Mapped[list[Artifact]] = relationship(
         back_populates="job", lazy="selectin", order_by="Artifact.name", cascade="all, delete-orphan"
     )
+    deliveries: Mapped[list[WebhookDelivery]] = relationship(lazy="selectin", order_by="WebhookDelivery.created_at", viewonly=True)
 
 
 class Artifact(Base):

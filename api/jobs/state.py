@@ -15,6 +15,7 @@ from sqlalchemy.orm import Session
 
 from api.db import rowcount
 from api.models import Artifact, Job
+from api.webhooks import outbox
 
 TERMINAL = ("succeeded", "failed", "canceled")
 
@@ -78,32 +79,39 @@ def report_progress(session: Session, claim_: Claim, stage: str, progress: float
     return rowcount(result) == 1
 
 
-def succeed(session: Session, claim_: Claim, artifacts: list[dict], warnings: list[dict] | None = None) -> bool:
-    """running → succeeded with its artifact rows and warnings, in one transaction. False if this attempt lost the job."""
+def succeed(session: Session, claim_: Claim, artifacts: list[dict], warnings: list[dict] | None = None,
+            timings: dict[str, float] | None = None) -> bool:
+    """running → succeeded with its artifact rows, warnings, stage timings (seconds) and webhook event, in one
+    transaction. False if this attempt lost the job."""
     result = session.execute(
         update(Job).where(*_running(claim_))
         .values(status="succeeded", stage="done", progress=1.0, finished_at=now(), lease_expires_at=None,
-                warnings=warnings or [])
+                warnings=warnings or [], timings=timings)
         .execution_options(synchronize_session=False)
     )
     if rowcount(result) != 1:
         session.rollback()
         return False
     session.add_all(Artifact(job_id=claim_.job_id, **a) for a in artifacts)
+    outbox.record(session, claim_.job_id, "job.succeeded")
     session.commit()
     return True
 
 
 def fail(session: Session, claim_: Claim, code: str, message: str, warnings: list[dict] | None = None) -> bool:
-    """running → failed with a stable code, a human message and the warnings recorded up to the failure."""
+    """running → failed with a stable code, a human message, the warnings recorded up to the failure and the webhook event."""
     result = session.execute(
         update(Job).where(*_running(claim_))
         .values(status="failed", finished_at=now(), lease_expires_at=None, error_code=code, error_message=message[:4000],
                 warnings=warnings or [])
         .execution_options(synchronize_session=False)
     )
+    if rowcount(result) != 1:
+        session.rollback()
+        return False
+    outbox.record(session, claim_.job_id, "job.failed")
     session.commit()
-    return rowcount(result) == 1
+    return True
 
 
 def cancel(session: Session, job_id: uuid.UUID) -> bool:
@@ -113,8 +121,12 @@ def cancel(session: Session, job_id: uuid.UUID) -> bool:
         .values(status="canceled", finished_at=now(), lease_expires_at=None, error_code="canceled", error_message="canceled by the user")
         .execution_options(synchronize_session=False)
     )
+    if rowcount(result) != 1:
+        session.rollback()
+        return False
+    outbox.record(session, job_id, "job.canceled")
     session.commit()
-    return rowcount(result) == 1
+    return True
 
 
 def mark_enqueued(session: Session, job_id: uuid.UUID) -> None:
@@ -145,6 +157,8 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
         )
         if rowcount(result) == 1:
             (lost if done else requeue).append(job_id)
+            if done:
+                outbox.record(session, job_id, "job.failed")
     stale = t - timedelta(seconds=requeue_after_seconds)
     for (job_id,) in session.execute(select(Job.id).where(Job.status == "queued", Job.enqueued_at < stale)).all():
         session.execute(update(Job).where(Job.id == job_id, Job.status == "queued").values(enqueued_at=t)

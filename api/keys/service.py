@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session
 
 from api.jobs.state import now
 from api.models import ApiKey
+from api.webhooks.signing import new_secret
 
 KEY_PREFIX = "rf_"
 
@@ -22,7 +23,7 @@ def hash_key(secret: str) -> str:
 def create_key(session: Session, *, name: str, admin: bool = False) -> tuple[ApiKey, str]:
     """A new key row and its secret (the only time the secret exists outside the client); admin keys manage keys."""
     secret = KEY_PREFIX + secrets.token_urlsafe(32)
-    row = ApiKey(name=name, prefix=secret[:10], key_hash=hash_key(secret), is_admin=admin)
+    row = ApiKey(name=name, prefix=secret[:10], key_hash=hash_key(secret), is_admin=admin, webhook_secret=new_secret())
     session.add(row)
     session.commit()
     return row, secret

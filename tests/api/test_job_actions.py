@@ -6,7 +6,11 @@ import io
 import json
 import zipfile
 
-from tests.api.conftest import INGEST_ONLY
+import pytest
+
+from tests.api.conftest import BACKENDS, INGEST_ONLY
+
+pytestmark = pytest.mark.parametrize("storage_backend", BACKENDS, indirect=True)  # the same tests on S3
 
 
 def _fox_job(client, auth, dev_assets, options=INGEST_ONLY) -> dict:
@@ -37,12 +41,13 @@ def test_rerun_queues_the_same_inputs_and_options_again(client, auth, dev_assets
     assert again["options"] == job["options"] and again["mesh"] == job["mesh"]
 
 
-def test_delete_removes_a_finished_job_and_its_files(client, auth, other_auth, dev_assets, data_dir):
+def test_delete_removes_a_finished_job_and_its_files(client, auth, other_auth, dev_assets, stored_names):
     job = _fox_job(client, auth, dev_assets)
+    assert [n for n in stored_names() if job["id"] in n]
     assert client.delete(f"/api/v1/jobs/{job['id']}", headers=other_auth).status_code == 404  # not theirs
     assert client.delete(f"/api/v1/jobs/{job['id']}", headers=auth).status_code == 204
     assert client.get(f"/api/v1/jobs/{job['id']}", headers=auth).status_code == 404
-    assert not list(data_dir.rglob(job["id"]))  # its outputs directory is gone
+    assert not [n for n in stored_names() if job["id"] in n]  # its outputs are gone
 
 
 def test_deleting_a_source_job_unlinks_its_reskins(client, auth, dev_assets):
@@ -54,8 +59,20 @@ def test_deleting_a_source_job_unlinks_its_reskins(client, auth, dev_assets):
     assert client.get(f"/api/v1/jobs/{r.json()['id']}", headers=auth).json()["source_job_id"] is None
 
 
-def test_a_queued_job_cannot_be_deleted(client, auth, dev_assets, monkeypatch):
+def test_deleting_a_queued_job_cancels_it_and_removes_its_upload(client, auth, dev_assets, data_dir, monkeypatch):
     monkeypatch.setattr("worker.celery_app.enqueue", lambda job_id: None)  # nobody runs it
     job = _fox_job(client, auth, dev_assets)
-    r = client.delete(f"/api/v1/jobs/{job['id']}", headers=auth)
-    assert r.status_code == 409 and r.json()["code"] == "job_active"
+    assert job["status"] == "queued"
+    assert len(list((data_dir / "storage" / "uploads").iterdir())) == 1
+    assert client.delete(f"/api/v1/jobs/{job['id']}", headers=auth).status_code == 204
+    assert client.get(f"/api/v1/jobs/{job['id']}", headers=auth).status_code == 404
+    assert not list((data_dir / "storage" / "uploads").iterdir())
+
+
+def test_an_upload_two_jobs_share_stays_until_both_are_deleted(client, auth, dev_assets, data_dir):
+    first, second = _fox_job(client, auth, dev_assets), _fox_job(client, auth, dev_assets)
+    uploads = data_dir / "storage" / "uploads"
+    assert client.delete(f"/api/v1/jobs/{first['id']}", headers=auth).status_code == 204
+    assert len(list(uploads.iterdir())) == 1 and client.get(f"/api/v1/jobs/{second['id']}", headers=auth).status_code == 200
+    assert client.delete(f"/api/v1/jobs/{second['id']}", headers=auth).status_code == 204
+    assert not list(uploads.iterdir())
