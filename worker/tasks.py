@@ -6,34 +6,49 @@ import os
 import socket
 import uuid
 
-from celery.signals import worker_ready, worker_shutdown
+from celery.signals import setup_logging, worker_ready, worker_shutdown
 
+from api.log_format import configure, job_context
 from api.settings import get_settings
 from worker.celery_app import TASK_NAME, make_celery
+from worker.maintenance import Maintenance
 from worker.reconciler import Reconciler
 from worker.runner import execute
 
 app = make_celery()
 _reconciler: Reconciler | None = None
+_maintenance: Maintenance | None = None
 
 
 @app.task(name=TASK_NAME, ignore_result=True)
 def run_job(job_id: str) -> str:
     """Run job `job_id` if this delivery wins the claim."""
-    return execute(uuid.UUID(job_id), get_settings(), f"{socket.gethostname()}:{os.getpid()}")
+    with job_context(job_id):
+        return execute(uuid.UUID(job_id), get_settings(), f"{socket.gethostname()}:{os.getpid()}")
+
+
+@setup_logging.connect
+def _configure_logging(loglevel: str | None = None, **_: object) -> None:
+    """Our log format (RIGFORGE_LOG_FORMAT) instead of Celery's."""
+    configure(get_settings(), loglevel or "INFO")
 
 
 @worker_ready.connect
-def _start_reconciler(**_: object) -> None:
-    global _reconciler
+def _start_reconciler(sender: object = None, **_: object) -> None:
+    global _reconciler, _maintenance
     from worker.embedded import ready_file
 
     ready_file(get_settings(), os.getpid()).touch()  # tells a supervising `serve` this worker consumes
     _reconciler = Reconciler(get_settings())
     _reconciler.start()
+    concurrency = int(getattr(getattr(sender, "controller", None), "concurrency", 1) or 1)
+    _maintenance = Maintenance(get_settings(), f"{socket.gethostname()}:{os.getpid()}", concurrency)
+    _maintenance.start()
 
 
 @worker_shutdown.connect
 def _stop_reconciler(**_: object) -> None:
     if _reconciler is not None:
         _reconciler.stopped.set()
+    if _maintenance is not None:
+        _maintenance.stop()
