@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import socket
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 from fastapi.testclient import TestClient
@@ -35,8 +35,45 @@ def inline_worker(monkeypatch) -> list[str]:
 
 
 @pytest.fixture
-def client(data_dir, inline_worker) -> Iterator[TestClient]:
-    with service_env(data_dir, max_upload_mb="2"):
+def storage_backend(request) -> str:
+    """'local' (the default) or 's3'; test modules run on both with
+    `pytestmark = pytest.mark.parametrize("storage_backend", BACKENDS, indirect=True)`."""
+    return getattr(request, "param", "local")
+
+
+BACKENDS = ["local", "s3"]
+
+
+@pytest.fixture
+def storage_settings(storage_backend, monkeypatch) -> dict[str, str]:
+    """RIGFORGE_ settings of the backend: none for local files, a fresh bucket on the test S3 server for s3."""
+    if storage_backend == "local":
+        return {}
+    from tests.s3_server import CREDENTIALS, S3_ENDPOINT, new_bucket
+
+    for name, value in CREDENTIALS.items():
+        monkeypatch.setenv(name, value)
+    return {"storage_url": f"s3://{new_bucket()}/rigforge", "s3_endpoint_url": S3_ENDPOINT}
+
+
+@pytest.fixture
+def stored_names(storage_settings, data_dir) -> Callable[[], list[str]]:
+    """Lists every stored name: files under the data directory and, on S3, the bucket's keys."""
+
+    def names() -> list[str]:
+        local = [str(p.relative_to(data_dir)) for p in data_dir.rglob("*") if p.is_file()]
+        if not storage_settings:
+            return local
+        from tests.s3_server import bucket_keys
+
+        return local + bucket_keys(storage_settings["storage_url"].split("/")[2])
+
+    return names
+
+
+@pytest.fixture
+def client(data_dir, inline_worker, storage_settings) -> Iterator[TestClient]:
+    with service_env(data_dir, max_upload_mb="2", **storage_settings):
         from api.app import create_app
 
         with TestClient(create_app(), raise_server_exceptions=False) as c:

@@ -59,20 +59,20 @@ def test_deleting_a_source_job_unlinks_its_reskins(client, auth, dev_assets):
     assert client.get(f"/api/v1/jobs/{r.json()['id']}", headers=auth).json()["source_job_id"] is None
 
 
-def test_deleting_a_queued_job_cancels_it_and_removes_its_upload(client, auth, dev_assets, data_dir, monkeypatch):
+def test_deleting_a_queued_job_cancels_it_and_removes_its_upload(client, auth, dev_assets, stored_names, monkeypatch):
     monkeypatch.setattr("worker.celery_app.enqueue", lambda job_id: None)  # nobody runs it
     job = _fox_job(client, auth, dev_assets)
     assert job["status"] == "queued"
-    assert len(list((data_dir / "storage" / "uploads").iterdir())) == 1
+    assert len([n for n in stored_names() if "uploads/" in n]) == 1
     assert client.delete(f"/api/v1/jobs/{job['id']}", headers=auth).status_code == 204
     assert client.get(f"/api/v1/jobs/{job['id']}", headers=auth).status_code == 404
-    assert not list((data_dir / "storage" / "uploads").iterdir())
+    assert not [n for n in stored_names() if "uploads/" in n]
 
 
-def test_an_upload_two_jobs_share_stays_until_both_are_deleted(client, auth, dev_assets, data_dir):
+def test_an_upload_two_jobs_share_stays_until_both_are_deleted(client, auth, dev_assets, stored_names):
     first, second = _fox_job(client, auth, dev_assets), _fox_job(client, auth, dev_assets)
-    uploads = data_dir / "storage" / "uploads"
     assert client.delete(f"/api/v1/jobs/{first['id']}", headers=auth).status_code == 204
-    assert len(list(uploads.iterdir())) == 1 and client.get(f"/api/v1/jobs/{second['id']}", headers=auth).status_code == 200
+    assert len([n for n in stored_names() if "uploads/" in n]) == 1
+    assert client.get(f"/api/v1/jobs/{second['id']}", headers=auth).status_code == 200
     assert client.delete(f"/api/v1/jobs/{second['id']}", headers=auth).status_code == 204
-    assert not list(uploads.iterdir())
+    assert not [n for n in stored_names() if "uploads/" in n]

@@ -5,9 +5,12 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from simcore.io.gltf_document import GltfDocument
-from tests.api.conftest import INGEST_ONLY
+from tests.api.conftest import BACKENDS, INGEST_ONLY
+
+pytestmark = pytest.mark.parametrize("storage_backend", BACKENDS, indirect=True)  # the same tests on S3
 
 
 def submit(client, auth, data: bytes, name="fox.glb", options=INGEST_ONLY, headers=None, **files):
