@@ -29,6 +29,7 @@ def rig(
                                                   help="an edited skeleton.json to re-skin with (needs skeleton: keep)")] = None,
 ) -> None:
     """Rig one file locally and write the artifacts to OUTPUT."""
+    from api.settings import get_settings
     from simcore.errors import SimcoreError
     from simcore.options import JobOptions
     from simcore.pipeline import PipelineInputs, run_pipeline
@@ -43,7 +44,7 @@ def rig(
                                 motion, _read_format(motion, "motion", "motion") if motion else None,
                                 skeleton_path=skeleton)
         with stage_bar(input.name) as update:
-            state = run_pipeline(inputs, opts, output, update)
+            state = run_pipeline(inputs, opts, output, update, budgets=get_settings().budgets)
     except SimcoreError as exc:
         typer.echo(f"error [{exc.code}]{f' ({exc.field})' if exc.field else ''}: {exc}", err=True)
         raise typer.Exit(1) from exc

@@ -59,6 +59,8 @@ def _load_other(data: bytes, fmt: str) -> tuple[np.ndarray, np.ndarray, list]:
         check_polygon_sizes(data)
     try:
         scene = trimesh.load(io.BytesIO(data), file_type=fmt, force="scene", process=False)
+    except MemoryError:  # the worker's memory cap, not a broken file
+        raise
     except Exception as exc:  # noqa: BLE001 - trimesh raises many types for broken files
         message = f"the {fmt.upper()} file could not be read: {type(exc).__name__}: {exc}"[:500]
         raise InvalidInput(message, code="unreadable_mesh", field="mesh") from exc

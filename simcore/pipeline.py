@@ -19,9 +19,11 @@ if TYPE_CHECKING:
     import numpy as np
     import scipy.sparse as sp
 
+    from simcore.budgets import Budgets
     from simcore.ingest import IngestedMesh
     from simcore.motion.types import JointAnimation
     from simcore.skeleton.types import Skeleton
+    from simcore.stage_clock import StageClock
 
 ProgressCallback = Callable[[str, float], None]  # (stage name, overall fraction 0..1)
 CancelCheck = Callable[[], None]  # raises simcore.errors.Canceled when the job was canceled
@@ -65,17 +67,22 @@ class PipelineState:
 
 
 class StageProgress:
-    """Maps a stage's own 0..1 progress onto the job's overall progress and checks for cancel."""
+    """Maps a stage's own 0..1 progress onto the job's overall progress, checks for cancel and the stage's budget."""
 
-    def __init__(self, name: str, start: float, span: float, report: ProgressCallback, check_cancel: CancelCheck):
+    def __init__(self, name: str, start: float, span: float, report: ProgressCallback, check_cancel: CancelCheck,
+                 clock: StageClock | None = None):
         self.name, self._start, self._span = name, start, span
-        self._report, self._check_cancel = report, check_cancel
+        self._report, self._check_cancel, self._clock = report, check_cancel, clock
 
     def __call__(self, fraction: float) -> None:
         self._report(self.name, self._start + self._span * min(max(fraction, 0.0), 1.0))
+        if self._clock is not None:
+            self._clock.check()
 
     def check_cancel(self) -> None:
         self._check_cancel()
+        if self._clock is not None:
+            self._clock.check()
 
 
 def _stages() -> list[tuple[str, float, Callable[[PipelineState, StageProgress], None]]]:
@@ -102,15 +109,33 @@ def run_pipeline(
     workdir: Path,
     on_progress: ProgressCallback = lambda stage, fraction: None,
     check_cancel: CancelCheck = lambda: None,
+    budgets: Budgets | None = None,
 ) -> PipelineState:
     """Run every applicable stage and its quality checks, write report.json, return the final state (artifacts
-    in workdir). A SimcoreError leaves with the warnings recorded so far in its `warnings`."""
-    from simcore.errors import SimcoreError
-    from simcore.gate.checks import check_stage
+    in workdir). Each stage runs within its time budget (StageTimeout), a refused allocation fails it with
+    OutOfMemory, and a job that cannot fit the memory budget fails before its heavy stages (too_large). A
+    SimcoreError leaves with the warnings recorded so far in its `warnings`."""
+    from simcore.budgets import Budgets, use
 
     workdir.mkdir(parents=True, exist_ok=True)
     state = PipelineState(inputs, options, workdir)
-    wanted = options.stages
+    with use(budgets or Budgets()):
+        _run_stages(state, on_progress, check_cancel)
+    report_path = workdir / "report.json"
+    report_path.write_text(json.dumps(state.report, indent=2, default=str))
+    state.artifacts["report.json"] = report_path
+    on_progress("done", 1.0)
+    return state
+
+
+def _run_stages(state: PipelineState, on_progress: ProgressCallback, check_cancel: CancelCheck) -> None:
+    from simcore.budgets import current, is_allocation_failure, out_of_memory
+    from simcore.errors import SimcoreError
+    from simcore.gate.checks import check_stage
+    from simcore.job_cost import check_fits
+    from simcore.stage_clock import StageClock
+
+    wanted = state.options.stages
     stages = [s for s in _stages() if wanted is None or s[0] == "ingest" or s[0] in wanted]
     total = sum(cost for _, cost, _ in stages)
     done = 0.0
@@ -120,17 +145,24 @@ def run_pipeline(
         started = time.perf_counter()
         on_progress(name, done / total)
         state.stage = name
+        refused = False
         try:
-            run(state, StageProgress(name, done / total, cost / total, on_progress, check_cancel))
+            check_fits(name, state)
+            with StageClock(name, current().stage_seconds(name)) as clock:
+                run(state, StageProgress(name, done / total, cost / total, on_progress, check_cancel, clock))
+                clock.check()
             check_stage(name, state)
         except SimcoreError as exc:
             exc.warnings = list(state.report.get("warnings", []))
             raise
+        except (MemoryError, RuntimeError) as exc:
+            if not is_allocation_failure(exc):
+                raise
+            refused = True  # raised below, once this handler has dropped the failed stage's frames and arrays
+        if refused:
+            error = out_of_memory(name)
+            error.warnings = list(state.report.get("warnings", []))
+            raise error
         timings[name] = round(time.perf_counter() - started, 3)
         done += cost
     state.report["timings_s"] = timings
-    report_path = workdir / "report.json"
-    report_path.write_text(json.dumps(state.report, indent=2, default=str))
-    state.artifacts["report.json"] = report_path
-    on_progress("done", 1.0)
-    return state

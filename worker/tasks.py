@@ -6,7 +6,7 @@ import os
 import socket
 import uuid
 
-from celery.signals import setup_logging, worker_ready, worker_shutdown
+from celery.signals import celeryd_after_setup, setup_logging, worker_process_init, worker_ready, worker_shutdown
 
 from api.log_format import configure, job_context
 from api.settings import get_settings
@@ -18,6 +18,7 @@ from worker.runner import execute
 app = make_celery()
 _reconciler: Reconciler | None = None
 _maintenance: Maintenance | None = None
+_pool_size = 1  # this worker's pool processes (its concurrency), known to the children it forks
 
 
 @app.task(name=TASK_NAME, ignore_result=True)
@@ -31,6 +32,20 @@ def run_job(job_id: str) -> str:
 def _configure_logging(loglevel: str | None = None, **_: object) -> None:
     """Our log format (RIGFORGE_LOG_FORMAT) instead of Celery's."""
     configure(get_settings(), loglevel or "INFO")
+
+
+@celeryd_after_setup.connect
+def _note_pool_size(instance: object, **_: object) -> None:
+    global _pool_size
+    _pool_size = int(getattr(instance, "concurrency", 1) or 1)
+
+
+@worker_process_init.connect
+def _cap_pool_process_memory(**_: object) -> None:
+    """Each pool process may use its share of memory: a job past it fails with out_of_memory, the process lives."""
+    from simcore.budgets import apply_memory_cap
+
+    apply_memory_cap(get_settings().budgets.memory_cap_bytes(_pool_size))
 
 
 @worker_ready.connect

@@ -1,9 +1,9 @@
 """Solid voxelisation robust to holes, several components and self-intersections.
 
-Surface voxels are rasterised from dense barycentric samples; the shell is dilated by `close_radius`
-voxels so that holes up to about that size seal, everything not reachable from the grid border is
-inside, and the dilation is undone by an erosion (surface voxels are always kept). Used by skeleton
-extraction, geodesic skinning and MPM volume sampling.
+Surface voxels are rasterised from dense barycentric samples, made in bounded chunks and within the job's
+surface-sample budget (simcore.budgets); the shell is dilated by `close_radius` voxels so that holes up to
+about that size seal, everything not reachable from the grid border is inside, and the dilation is undone by
+an erosion (surface voxels are always kept). Used by skeleton extraction, geodesic skinning and MPM sampling.
 """
 
 from __future__ import annotations
@@ -15,9 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from simcore import budgets
 from simcore.arrays import unique_ints
+from simcore.errors import LimitExceeded
 
 PAD = 2  # empty voxels around the mesh so the outside is one connected region
+MAX_STEPS = 256  # lattice steps along a triangle's longest edge, at most
+CHUNK_POINTS = 1 << 20  # lattice points made at once: bounds the voxeliser's working memory
 
 
 @dataclass
@@ -63,13 +67,35 @@ def _barycentric(n: int) -> np.ndarray:
     return np.stack([a[keep], b[keep], n - a[keep] - b[keep]], axis=1) / n
 
 
-def _lattice_points(tri: np.ndarray, spacing: float, min_steps: int = 1) -> Iterator[np.ndarray]:
-    """Lattice points of triangles tri (F, 3, 3), no two neighbours farther apart than `spacing`: one (N, 3)
-    array per step count n ≥ min_steps (a triangle whose longest edge needs n steps gets an n-step lattice)."""
+def _lattice_steps(tri: np.ndarray, spacing: float) -> np.ndarray:
+    """(F,) int64 lattice steps per triangle of tri (F, 3, 3): its longest edge over `spacing`, 1..MAX_STEPS."""
     edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-    steps = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, 256)
+    return np.clip(np.ceil(edge / spacing), 1, MAX_STEPS).astype(np.int64)
+
+
+def _check_sample_budget(steps: np.ndarray) -> None:
+    """Refuse a mesh whose triangles need more lattice points than the job's surface-sample budget."""
+    limit = budgets.current().surface_samples
+    needed = int(((steps + 1) * (steps + 2) // 2).sum())
+    if needed > limit:
+        raise LimitExceeded(
+            f"the mesh's triangles need {needed:,} surface samples to voxelise, more than the limit of {limit:,} "
+            "(RIGFORGE_BUDGETS__SURFACE_SAMPLES): it has many huge or overlapping triangles; remesh it into smaller ones",
+            code="too_large", field="mesh")
+
+
+def _lattice_points(tri: np.ndarray, spacing: float, min_steps: int = 1) -> Iterator[np.ndarray]:
+    """Lattice points of triangles tri (F, 3, 3), no two neighbours farther apart than `spacing`: (N, 3) arrays of
+    at most about CHUNK_POINTS points (a triangle whose longest edge needs n steps gets an n-step lattice).
+    Raises LimitExceeded (too_large) before making any when they would be more than the surface-sample budget."""
+    steps = _lattice_steps(tri, spacing)
+    _check_sample_budget(steps[steps >= min_steps])
     for n in np.unique(steps[steps >= min_steps]):
-        yield np.matmul(_barycentric(int(n))[None], tri[steps == n]).reshape(-1, 3)  # 6× faster than einsum
+        lattice = _barycentric(int(n))
+        chosen = np.flatnonzero(steps == n)
+        per_chunk = max(1, CHUNK_POINTS // len(lattice))
+        for start in range(0, len(chosen), per_chunk):
+            yield np.matmul(lattice[None], tri[chosen[start:start + per_chunk]]).reshape(-1, 3)  # 6× faster than einsum
 
 
 def surface_samples(vertices: np.ndarray, faces: np.ndarray, spacing: float) -> np.ndarray:

@@ -26,6 +26,8 @@ def _decode(blob: bytes, where: str):
 
     try:
         return DracoPy.decode(blob)
+    except MemoryError:  # the worker's memory cap, not corrupt data
+        raise
     except Exception as exc:  # noqa: BLE001 - the decoder raises several types for corrupt data
         raise InvalidInput(f"{where}: the Draco data could not be decoded ({type(exc).__name__})",
                            code="invalid_gltf", field="mesh") from exc
