@@ -51,8 +51,21 @@ def json_part_encoding(*fields: str) -> dict[str, Any]:
     return {"requestBody": {"content": {"multipart/form-data": {"encoding": encoding}}}}
 
 
+def mark_binary(node: Any) -> None:
+    """Add `format: binary` to OpenAPI 3.1 file schemas (`contentMediaType: application/octet-stream`), in place:
+    generators (openapi-python-client, openapi-generator) still recognise uploads by the 3.0 form."""
+    if isinstance(node, dict):
+        if node.get("type") == "string" and node.get("contentMediaType") == "application/octet-stream":
+            node.setdefault("format", "binary")
+        for value in node.values():
+            mark_binary(value)
+    elif isinstance(node, list):
+        for value in node:
+            mark_binary(value)
+
+
 class DocumentedAPI(FastAPI):
-    """FastAPI whose document also holds the component models listed in COMPONENT_MODELS."""
+    """FastAPI whose document also holds the component models listed in COMPONENT_MODELS, uploads marked binary."""
 
     def openapi(self) -> dict[str, Any]:
         if self.openapi_schema is None:
@@ -61,4 +74,5 @@ class DocumentedAPI(FastAPI):
             schemas = spec.setdefault("components", {}).setdefault("schemas", {})
             schemas.update(defs.get("$defs", {}))
             spec["components"]["schemas"] = dict(sorted(schemas.items()))
+            mark_binary(spec["components"]["schemas"])
         return self.openapi_schema  # type: ignore[return-value]  # set by super().openapi()
