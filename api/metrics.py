@@ -40,12 +40,13 @@ class JobsCollector(Collector):
         t = utcnow()
         seen_after = t - timedelta(seconds=WORKER_SEEN_BEATS * get_settings().jobs.heartbeat_seconds)
         with session_scope() as session:
-            by_status = dict(session.execute(select(Job.status, func.count()).group_by(Job.status)).tuples().all())
+            by_status: dict[str, int] = {status: count for status, count in session.execute(
+                select(Job.status, func.count()).group_by(Job.status))}
             oldest_queued = session.scalar(select(func.min(Job.created_at)).where(Job.status == "queued"))
             workers = session.execute(select(func.count(), func.coalesce(func.sum(Worker.concurrency), 0))
                                       .where(Worker.last_seen_at > seen_after)).one()
-            deliveries = dict(session.execute(select(WebhookDelivery.status, func.count()).group_by(WebhookDelivery.status))
-                              .tuples().all())
+            deliveries: dict[str, int] = {status: count for status, count in session.execute(
+                select(WebhookDelivery.status, func.count()).group_by(WebhookDelivery.status))}
             timings = session.scalars(select(Job.timings).where(Job.status == "succeeded", Job.finished_at > t - STAGE_WINDOW,
                                                                Job.timings.is_not(None))
                                       .order_by(Job.finished_at.desc()).limit(STAGE_WINDOW_JOBS)).all()
