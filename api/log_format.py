@@ -13,7 +13,7 @@ from typing import Any
 from api.settings import Settings
 
 _job_id: ContextVar[str | None] = ContextVar("job_id", default=None)
-TEXT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
+TEXT = "%(asctime)s %(levelname)s %(name)s: %(job_tag)s%(message)s"
 JSON_FIELDS = "%(asctime)s %(levelname)s %(name)s %(message)s %(job_id)s %(process)d"
 
 
@@ -23,6 +23,7 @@ class JobIdFilter(logging.Filter):
     def filter(self, record: logging.LogRecord) -> bool:
         if getattr(record, "job_id", None) is None:
             record.job_id = _job_id.get()
+        record.job_tag = f"[job {record.job_id}] " if record.job_id else ""
         return True
 
 
