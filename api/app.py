@@ -9,7 +9,7 @@ from fastapi import FastAPI
 from fastapi.middleware.gzip import GZipMiddleware
 from fastapi.staticfiles import StaticFiles
 
-from api import docs_pages, errors, health
+from api import access_log, docs_pages, errors, health
 from api.jobs.router import router as jobs_router
 from api.jobs.signed_router import router as files_router
 from api.keys.router import router as keys_router
@@ -34,6 +34,7 @@ def create_app() -> FastAPI:
     app = DocumentedAPI(title="RigForge", version="0.1.0", generate_unique_id_function=operation_id, docs_url=None, redoc_url=None,
                         description="Automatic rigging and skinning of 3D characters.")
     errors.install(app)
+    access_log.install()  # no keys or signed links in access log lines
     app.include_router(docs_pages.router)
     app.include_router(health.router)
     app.include_router(jobs_router)

@@ -17,8 +17,12 @@ bearer = HTTPBearer(auto_error=False, scheme_name="bearerAuth", description="an 
 
 
 def current_key(request: Request, credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)]) -> ApiKey:
-    """The active key named by `Authorization: Bearer <key>` (or `?key=` for EventSource/downloads)."""
-    secret = credentials.credentials if credentials else request.query_params.get("key", "")
+    """The active key named by `Authorization: Bearer <key>`. Keys in URLs are refused: URLs end up in access logs,
+    browser history and shared links (downloads have signed links, events are read with the header)."""
+    if "key" in request.query_params:
+        raise Problem(401, "key_in_url", "send the API key in the 'Authorization: Bearer <key>' header, never in the URL; "
+                      "to download without a key use the job's download_url", field="key", headers={"WWW-Authenticate": "Bearer"})
+    secret = credentials.credentials if credentials else ""
     if not secret:
         raise Problem(401, "unauthorized", "send an API key as 'Authorization: Bearer <key>'", headers={"WWW-Authenticate": "Bearer"})
     with session_scope() as session:

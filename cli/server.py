@@ -61,6 +61,8 @@ def serve(
     host: Annotated[str | None, typer.Option(help="bind address (default RIGFORGE_HOST or 127.0.0.1)")] = None,
     port: Annotated[int | None, typer.Option(help="port (default RIGFORGE_PORT or 8000)")] = None,
     no_worker: Annotated[bool, typer.Option("--no-worker", help="API only (workers run elsewhere)")] = False,
+    migrate_first: Annotated[bool, typer.Option("--migrate/--no-migrate", help="bring the database to head first (scaled out, "
+                                                "one `rigforge migrate` does it before any replica starts)")] = True,
 ) -> None:
     """Migrate, then serve the API and dashboard, with one embedded worker unless --no-worker."""
     import uvicorn
@@ -68,8 +70,9 @@ def serve(
     from api.log_format import log_config
 
     settings = get_settings()
-    migrate()
-    secret = ensure_local_key()
+    if migrate_first:
+        migrate()
+    secret = ensure_local_key() if settings.env == "development" else None  # production: `rigforge keys create --admin`
     if secret:
         typer.echo(f"local API key (also in {settings.local_key_file}): {secret}")
     embedded = None
