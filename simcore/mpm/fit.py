@@ -11,9 +11,14 @@ Parameterisation (our choices): materials as θ_p = 4 · log(E_p / E_preset) (po
 toward the preset; the factor 4 makes the paper's 20× learning-rate ratio give 0.05 steps in log E, larger
 steps overshoot the narrow valleys of the chamfer loss in E), ν fixed (the paper assumes one ν per object); velocities in grid cells per frame so
 that the SGD learning rate does not depend on the mesh's scale or frame rate.
-Driving points without a skeleton: `virtual_joints` centres by farthest-point sampling of the volume (the
-paper's "uniform sampling" initialisation), 8 points each; initial velocity of a frame = mean velocity of
-the target vertices nearest the centre (the paper's neighbourhood initialisation).
+Learned mixing (eq. 11): with `learn_mixing` the material phase also moves each prototype's centre (in cells),
+its axes (a rotation vector) and its log radii, so the per-particle weights W(x) are learned with E; their
+gradients come from dL/dE per particle through the softmax (torch).
+Driving points: with `drivers="skeleton"` a skeleton is predicted on frame 0 (geometric, as the paper uses
+Pinocchio) with coarse geodesic skinning weights, and each joint gets 8 points along its bone cores
+(`place_drivers` "bones"); with "virtual", `virtual_joints` centres by farthest-point sampling of the volume
+(the paper's "uniform sampling" initialisation), 8 points each on a cube. Initial velocity of a driving
+point per frame = mean displacement of the target vertices nearest it (the paper's neighbourhood average).
 """
 
 from __future__ import annotations
@@ -25,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from simcore.mpm.drivers import CUBE, PER_JOINT
-from simcore.mpm.materials import PRESETS, Prototypes, farthest_points, lame, prototype_weights, seed_prototypes
+from simcore.mpm.drivers import CUBE
+from simcore.mpm.materials import PRESETS, Prototypes, farthest_points, lame, seed_prototypes
 from simcore.mpm.measures import chamfer, chamfer_grad
 from simcore.mpm.sampling import sample_volume
 
@@ -53,12 +58,15 @@ class FitConfig:
     preset: str = "flesh"
     seed: int = 0
     device: str | None = None
+    drivers: str = "skeleton"  # "skeleton" (predicted on frame 0) or "virtual" (farthest-point centres)
+    max_joints: int = 24  # skeleton drivers: joints of the predicted skeleton at most
+    learn_mixing: bool = True  # material phase also learns prototype centres, axes and radii
 
 
 @dataclass
 class FitScene:
     """A prepared inverse problem: targets (T, V, 3) float64; particles x0 (N, 3) at frame 0;
-    vertex_particles (V,) int64; prototypes + weights (N, P); driver rest points (D, 3) at frame 0;
+    vertex_particles (V,) int64; prototypes (initial); driver rest points (D, 3) at frame 0;
     velocities (T-1, D, 3) cells/frame; centres (T, 3) grid centres; dx, grid, dt, substeps, frame_dt."""
 
     targets: np.ndarray
@@ -67,7 +75,6 @@ class FitScene:
     particle_volume: float
     density: float
     protos: Prototypes
-    proto_weights: np.ndarray
     drivers0: np.ndarray
     velocities: np.ndarray
     centres: np.ndarray
@@ -76,6 +83,8 @@ class FitScene:
     substeps: int
     frame_dt: float
     nu: float
+    joints: np.ndarray  # (M, 3) joint (or virtual joint) positions at frame 0
+    joint_weights: np.ndarray | None = None  # (V, M) coarse skinning weights of the target vertices (skeleton drivers)
 
 
 @dataclass
@@ -101,16 +110,33 @@ def prepare_scene(targets: np.ndarray, faces: np.ndarray, fps: float, config: Fi
     sample = sample_volume(targets[0], faces, 0.5 * dx, max_particles=config.max_particles, seed=config.seed)
     material = PRESETS[config.preset]
     protos = seed_prototypes(sample.positions, config.prototypes, material, sample.volume, seed=config.seed)
-    if driver_centres is None:
-        driver_centres = sample.positions[farthest_points(sample.positions, config.virtual_joints, config.seed + 1)]
-    drivers0 = (np.asarray(driver_centres)[:, None, :] + CUBE[None] * 0.5 * dx).reshape(-1, 3)
+    joint_weights = None
+    if driver_centres is None and config.drivers == "skeleton":
+        driver_centres, drivers0, joint_weights = skeleton_drivers(targets[0], faces, dx, config.max_joints)
+    else:
+        if driver_centres is None:
+            driver_centres = sample.positions[farthest_points(sample.positions, config.virtual_joints, config.seed + 1)]
+        drivers0 = (np.asarray(driver_centres)[:, None, :] + CUBE[None] * 0.5 * dx).reshape(-1, 3)
     frame_dt = 1.0 / fps
-    _, near = cKDTree(targets[0]).query(driver_centres, k=min(NEIGHBOURS, targets.shape[1]))
-    step = np.diff(targets, axis=0)[:, near].mean(axis=2)  # (T-1, M, 3) mean neighbour displacement per frame
-    velocities = np.repeat(step / dx, PER_JOINT, axis=1)  # cells per frame, (T-1, D, 3)
+    _, near = cKDTree(targets[0]).query(drivers0, k=min(NEIGHBOURS, targets.shape[1]))
+    velocities = np.diff(targets, axis=0)[:, near].mean(axis=2) / dx  # (T-1, D, 3) cells per frame
     return FitScene(targets, sample.positions, sample.vertex_particles, sample.particle_volume, material.density,
-                    protos, prototype_weights(sample.positions, protos), drivers0, velocities,
-                    0.5 * (lo + hi), dx, grid, config.substeps, frame_dt, material.nu)
+                    protos, drivers0, velocities,
+                    0.5 * (lo + hi), dx, grid, config.substeps, frame_dt, material.nu,
+                    np.asarray(driver_centres, np.float64), joint_weights)
+
+
+def skeleton_drivers(vertices: np.ndarray, faces: np.ndarray, dx: float, max_joints: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Predicted skeleton of a mesh frame (V, 3): (joint positions (M, 3), driving points (8M, 3) along the bone
+    cores, coarse skinning weights (V, M) dense)."""
+    from simcore.mpm.drivers import leaf_tips, place_drivers
+    from simcore.skeleton.predict import predict_skeleton
+    from simcore.skinning.predict import compute_weights
+
+    skeleton = predict_skeleton(vertices, faces, method="geometric", max_joints=max_joints).skeleton
+    weights = compute_weights(vertices, faces, skeleton, method="geodesic").weights
+    drivers = place_drivers(skeleton, "bones", dx, tips=leaf_tips(skeleton, vertices, weights))
+    return skeleton.positions.copy(), drivers.rest, np.asarray(weights.todense(), np.float64)
 
 
 class PhysicsFit:
@@ -132,6 +158,10 @@ class PhysicsFit:
         self.rollout = DifferentiableRollout(self.solver, self.mu, self.lam, scene.substeps)
         self.start = self.solver.new_state(scene.x0)
         self.theta = np.zeros(scene.protos.count)  # LOG_E_SCALE · log(E / E_preset)
+        protos = scene.protos
+        # prototype geometry: centres in cells, axes as rotation vectors, log of Λ's diagonal
+        self.geometry = {"centres": protos.centres / scene.dx, "rotvec": np.zeros((protos.count, 3)),
+                         "log_inv_sq": np.log(protos.inv_sq_radii)}
         self.velocities = scene.velocities.copy()
         self.set_materials(self.theta)
 
@@ -143,9 +173,28 @@ class PhysicsFit:
     def theta_of(self, E: np.ndarray) -> np.ndarray:
         return LOG_E_SCALE * np.log(np.asarray(E, np.float64) / self.scene.protos.E)
 
-    def set_materials(self, theta: np.ndarray) -> None:
+    def particle_E(self, theta, geometry: dict):  # noqa: ANN001, ANN201 - torch tensors in, (N,) tensor out
+        """Eq. 11 in torch: per-particle E from prototype E (θ) and geometry (differentiable in both)."""
+        import torch
+
+        from simcore.mpm.lbs_fit import rodrigues
+
+        x = torch.as_tensor(self.scene.x0 / self.scene.dx)
+        R = rodrigues(geometry["rotvec"])  # (P, 3, 3)
+        local = torch.einsum("pab,npb->npa", R, x[:, None, :] - geometry["centres"][None])
+        d = (local**2 * torch.exp(geometry["log_inv_sq"])[None] * self.scene.dx**2).sum(-1)
+        w = torch.softmax(-d, dim=1)
+        return w @ (torch.as_tensor(self.scene.protos.E) * torch.exp(theta / LOG_E_SCALE))
+
+    def set_materials(self, theta: np.ndarray, geometry: dict | None = None) -> None:
+        import torch
+
         self.theta = np.asarray(theta, np.float64)
-        mu, lam = lame(self.scene.proto_weights @ self.E(), self.scene.nu)
+        if geometry is not None:
+            self.geometry = {k: np.asarray(v, np.float64) for k, v in geometry.items()}
+        with torch.no_grad():
+            E = self.particle_E(torch.as_tensor(self.theta), {k: torch.as_tensor(v) for k, v in self.geometry.items()})
+        mu, lam = lame(E.numpy(), self.scene.nu)
         self.mu.assign(mu.astype(np.float32))
         self.lam.assign(lam.astype(np.float32))
 
@@ -191,9 +240,14 @@ class PhysicsFit:
         import torch
 
         theta = torch.tensor(self.theta, dtype=torch.float64, requires_grad=True)
-        opt = torch.optim.AdamW([theta], lr=lr, weight_decay=self.config.weight_decay)
+        geometry = {k: torch.tensor(v, dtype=torch.float64, requires_grad=self.config.learn_mixing)
+                    for k, v in self.geometry.items()}
+        groups = [{"params": [theta], "weight_decay": self.config.weight_decay}]
+        if self.config.learn_mixing:
+            groups.append({"params": list(geometry.values()), "weight_decay": 0.0})
+        opt = torch.optim.AdamW(groups, lr=lr)
         sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda i: max(1.0 - i / max(iters, 1), 0.0))
-        total, best = 0.0, (np.inf, self.theta.copy())
+        total, best = 0.0, (np.inf, self.theta.copy(), dict(self.geometry))
         for _ in range(iters):
             drives = self.drives()
             xs = self.rollout.forward(self.start, drives)
@@ -202,27 +256,32 @@ class PhysicsFit:
                 loss, g = self._frame_loss(x, f + 1)
                 grads[f], total = g, total + loss
             if total < best[0]:
-                best = (total, self.theta.copy())
+                best = (total, self.theta.copy(), dict(self.geometry))
             self.mu.grad.zero_()
             self.lam.grad.zero_()
             self.rollout.backward(drives, grads)
             nu = self.scene.nu
             d_e = self.mu.grad.numpy() / (2 * (1 + nu)) + self.lam.grad.numpy() * nu / ((1 + nu) * (1 - 2 * nu))
-            d_theta = (self.scene.proto_weights.T @ d_e.astype(np.float64)) * self.E() / LOG_E_SCALE
-            theta.grad = torch.as_tensor(np.nan_to_num(d_theta))
+            opt.zero_grad()
+            # dL/dθ and dL/d(geometry) through E(x) = W(x) · E_p: backward of the surrogate Σ_n dL/dE_n · E_n
+            surrogate = (torch.as_tensor(np.nan_to_num(d_e.astype(np.float64))) * self.particle_E(theta, geometry)).sum()
+            surrogate.backward()
             opt.step()
             sched.step()
-            self.set_materials(theta.detach().numpy().copy())
+            self.set_materials(theta.detach().numpy().copy(), {k: v.detach().numpy().copy() for k, v in geometry.items()})
         if best[0] < total:  # a step can overshoot a narrow valley: leave the phase at its best evaluated point
-            self.set_materials(best[1])
+            self.set_materials(best[1], best[2])
             total = best[0]
         return total
 
-    def velocity_phase(self, iters: int, lr: float, progress: Callable[[float], None] = lambda f: None) -> float:
+    def velocity_phase(self, iters: int, lr: float, progress: Callable[[float], None] = lambda f: None,
+                       first: int = 0) -> float:
+        """SGD on the driving velocities frame by frame from frame interval `first` (earlier ones stay fixed);
+        returns the summed loss of the fitted intervals."""
         frames = len(self.velocities)
         self.rollout.forward(self.start, self.drives())  # checkpoints for every frame start
         total = 0.0
-        for f in range(frames):
+        for f in range(first, frames):
             loss = 0.0
             for i in range(iters):
                 drives = self.drives()
@@ -245,16 +304,28 @@ def per_frame_chamfer(frames: np.ndarray, targets: np.ndarray) -> np.ndarray:
     return np.array([chamfer(a, b) for a, b in zip(frames, targets)])
 
 
-def fit_physics(scene: FitScene, config: FitConfig, log: Callable[[str], None] = lambda s: None) -> FitResult:
-    """Run the alternating scheme on a prepared scene."""
+def fit_physics(scene: FitScene, config: FitConfig, log: Callable[[str], None] = lambda s: None,
+                materials_from: PhysicsFit | None = None, first: int = 0) -> tuple[FitResult, PhysicsFit]:
+    """Run the alternating scheme on a prepared scene.
+
+    materials_from: a fit whose materials (E and prototype geometry) are copied and kept fixed, and whose
+    velocities seed the intervals it covered (the test part of the train/test protocol: only the velocities of
+    intervals ≥ `first` are fitted). Returns the result and the fit (its parameters).
+    """
     started = time.perf_counter()
     fit = PhysicsFit(scene, config)
+    if materials_from is not None:
+        fit.set_materials(materials_from.theta, materials_from.geometry)
+        fit.velocities[:len(materials_from.velocities)] = materials_from.velocities
     init = per_frame_chamfer(fit.simulate(), scene.targets)
     losses = []
     for cycle in range(config.cycles):
-        m = fit.material_phase(config.material_iters, config.velocity_lr * config.material_lr_factor)
-        v = fit.velocity_phase(config.velocity_iters, config.velocity_lr)
-        losses += [m, v]
-        log(f"cycle {cycle + 1}/{config.cycles}: material-phase loss {m:.4f}, velocity-phase loss {v:.4f} (cells²)")
+        if materials_from is None:
+            m = fit.material_phase(config.material_iters, config.velocity_lr * config.material_lr_factor)
+            losses.append(m)
+        v = fit.velocity_phase(config.velocity_iters, config.velocity_lr, first=first)
+        losses.append(v)
+        log(f"cycle {cycle + 1}/{config.cycles}: phase losses {', '.join(f'{x:.4f}' for x in losses[-2:])} (cells²)")
     frames = fit.simulate()
-    return FitResult(init, per_frame_chamfer(frames, scene.targets), fit.E(), losses, time.perf_counter() - started, frames)
+    result = FitResult(init, per_frame_chamfer(frames, scene.targets), fit.E(), losses, time.perf_counter() - started, frames)
+    return result, fit

@@ -1,8 +1,10 @@
 """The inverse-skinning baseline: LBS with jointly optimised weights and bone transforms (PhysRig's LBS rows).
 
-M bones pivot at the same centres as the physics fit's virtual joints; weights are a softmax over bones per
-vertex (initialised from distance), each frame has a rotation (axis-angle about the bone centre) and a
-translation per bone (initialised from the neighbourhood displacement, as the physics velocities are).
+M bones pivot at the same joints as the physics fit's driving points (the predicted skeleton's joints, or its
+virtual joints); weights are a softmax over bones per vertex, initialised from the same coarse skinning
+weights as the drivers (PhysRig's LBS-2 row: Pinocchio-like weights, then joint optimisation) or from
+distance; each frame has a rotation (axis-angle about the joint) and a translation per bone (initialised
+from the neighbourhood displacement, as the physics velocities are).
 Adam on everything with the same squared-chamfer loss; torch on CPU.
 """
 
@@ -14,7 +16,7 @@ from scipy.spatial import cKDTree
 NEIGHBOURS = 16
 
 
-def _rodrigues(r):
+def rodrigues(r):  # noqa: ANN001, ANN201 - torch in, torch out
     """(..., 3) axis-angle → (..., 3, 3) rotation matrices (torch)."""
     import torch
 
@@ -36,10 +38,15 @@ def _chamfer_sq(a, b):
 
 
 def fit_lbs(targets: np.ndarray, centres: np.ndarray, steps: int, scale: float, lr: float = 0.01,
-            seed: int = 0) -> np.ndarray:
-    """(T, V, 3) float64 LBS reconstruction of targets (T, V, 3) from its frame 0 with bones at centres (M, 3).
+            seed: int = 0, init_weights: np.ndarray | None = None, frozen_logits: np.ndarray | None = None,
+            first: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """LBS reconstruction of targets (T, V, 3) from its frame 0 with bones pivoting at centres (M, 3).
 
-    steps: Adam iterations (the budget); scale: length unit of the loss (the physics fit's dx).
+    steps: Adam iterations (the budget); scale: length unit of the loss (the physics fit's dx);
+    init_weights: (V, M) coarse skinning weights to start from (default: a distance falloff);
+    frozen_logits: (V, M) weight logits kept fixed (the test part of the train/test protocol), only the
+    per-frame transforms are fitted, on frames > `first`.
+    Returns (T, V, 3) float64 frames and the (V, M) weight logits.
     """
     import torch
 
@@ -47,18 +54,23 @@ def fit_lbs(targets: np.ndarray, centres: np.ndarray, steps: int, scale: float, 
     tgt = torch.as_tensor(np.asarray(targets, np.float64))
     rest = tgt[0]
     c = torch.as_tensor(np.asarray(centres, np.float64))
-    d2 = torch.cdist(rest, c) ** 2
-    spread = float(cKDTree(centres).query(centres, k=2)[0][:, 1].mean()) if len(centres) > 1 else 1.0
-    logits = (-d2 / (2 * spread**2)).clone().requires_grad_(True)
+    if frozen_logits is not None:
+        logits = torch.as_tensor(np.asarray(frozen_logits, np.float64))
+    elif init_weights is not None:
+        logits = torch.log(torch.as_tensor(np.asarray(init_weights, np.float64)) + 1e-4).requires_grad_(True)
+    else:
+        d2 = torch.cdist(rest, c) ** 2
+        spread = float(cKDTree(centres).query(centres, k=2)[0][:, 1].mean()) if len(centres) > 1 else 1.0
+        logits = (-d2 / (2 * spread**2)).clone().requires_grad_(True)
     _, near = cKDTree(np.asarray(targets[0])).query(centres, k=min(NEIGHBOURS, targets.shape[1]))
     shift = (np.asarray(targets)[1:, near] - np.asarray(targets)[0, near][None]).mean(axis=2)  # (T-1, M, 3)
     trans = torch.as_tensor(shift).clone().requires_grad_(True)
     rot = torch.zeros_like(trans).requires_grad_(True)
-    opt = torch.optim.Adam([logits, trans, rot], lr=lr)
+    opt = torch.optim.Adam([trans, rot] + ([logits] if frozen_logits is None else []), lr=lr)
 
-    def pose():
+    def pose():  # noqa: ANN202 - (T-1, V, 3) tensor
         w = torch.softmax(logits, dim=1)  # (V, M)
-        R = _rodrigues(rot)  # (T-1, M, 3, 3)
+        R = rodrigues(rot)  # (T-1, M, 3, 3)
         local = rest[None, :, None, :] - c[None, None]  # (1, V, M, 3)
         moved = torch.einsum("tmab,tvmb->tvma", R, local.expand(len(R), -1, -1, -1)) + c[None, None] + trans[:, None]
         return torch.einsum("vm,tvma->tva", w, moved)
@@ -66,8 +78,8 @@ def fit_lbs(targets: np.ndarray, centres: np.ndarray, steps: int, scale: float, 
     for _ in range(steps):
         opt.zero_grad()
         frames = pose()
-        loss = sum(_chamfer_sq(frames[f], tgt[f + 1]) for f in range(len(frames))) / scale**2
+        loss = sum(_chamfer_sq(frames[f], tgt[f + 1]) for f in range(first, len(frames))) / scale**2
         loss.backward()
         opt.step()
     with torch.no_grad():
-        return torch.cat([rest[None], pose()]).numpy()
+        return torch.cat([rest[None], pose()]).numpy(), logits.detach().numpy().copy()

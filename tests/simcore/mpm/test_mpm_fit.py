@@ -30,3 +30,38 @@ def test_velocity_fit_reduces_the_chamfer_loss():
     after = fit.velocity_phase(5, 0.02)
     assert after < 0.8 * before
     assert fit.velocities[0, :, 1].mean() > 0.3 * 0.6  # moved toward the generating velocity
+
+
+def test_prototype_mixing_is_differentiable_in_the_geometry():
+    import torch
+
+    config = FitConfig(prototypes=3, grid=24, substeps=4, max_particles=600, drivers="virtual", virtual_joints=2)
+    vertices, faces = synthetic_bar(8)
+    scene = prepare_scene(np.repeat(vertices[None], 2, axis=0), faces, 25.0, config)
+    fit = PhysicsFit(scene, config)
+    theta = torch.tensor([0.0, 2.0, -2.0], dtype=torch.float64)  # distinct E, so moving a prototype changes E(x)
+    geometry = {k: torch.tensor(v, requires_grad=True) for k, v in fit.geometry.items()}
+    rng = np.random.default_rng(0)
+    probe = torch.as_tensor(rng.normal(size=len(scene.x0)))
+    (probe * fit.particle_E(theta, geometry)).sum().backward()
+    grad = geometry["centres"].grad.numpy()
+    assert np.abs(grad).max() > 0
+    eps = 1e-5
+    moved = {k: v.detach().clone() for k, v in geometry.items()}
+    moved["centres"][1, 0] += eps
+    with torch.no_grad():
+        fd = ((probe * fit.particle_E(theta, moved)).sum() - (probe * fit.particle_E(theta, geometry)).sum()) / eps
+    assert abs(float(fd) - grad[1, 0]) < 1e-3 * max(1.0, abs(grad[1, 0]))
+
+
+def test_lbs_test_phase_keeps_the_trained_weights():
+    from simcore.mpm.lbs_fit import fit_lbs
+
+    vertices, _ = synthetic_bar(6)
+    targets = np.stack([vertices + [0.0, 0.02 * t, 0.0] for t in range(4)])
+    centres = np.array([[-0.3, 0.0, 0.0], [0.3, 0.0, 0.0]])
+    _, logits = fit_lbs(targets[:2], centres, 5, scale=0.05)
+    frames, kept = fit_lbs(targets, centres, 20, scale=0.05, frozen_logits=logits, first=1)
+    assert np.array_equal(kept, logits)
+    before = np.abs(targets[3] - targets[0]).mean()
+    assert np.abs(frames[3] - targets[3]).mean() < before  # the held-out frames' transforms were fitted
