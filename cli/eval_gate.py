@@ -8,14 +8,15 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
 
 from cli.eval_output import write_report_json
-from simcore.evaluation.gate_eval import GateCalibration, calibrate_gate
-from simcore.gate.thresholds import THRESHOLDS_PATH, derive
+
+if TYPE_CHECKING:  # the evaluation imports the whole pipeline: loaded when the command runs, not with every `rigforge` call
+    from simcore.evaluation.gate_eval import GateCalibration
 
 
 def _cell(value: Any) -> str:
@@ -62,6 +63,9 @@ def eval_gate(
     json_path: Annotated[Path | None, typer.Option("--json", help="write the measurements as JSON here")] = None,
 ) -> None:
     """Measure the gate's figures on the artists' rigs and clips and derive its thresholds."""
+    from simcore.evaluation.gate_eval import calibrate_gate
+    from simcore.gate.thresholds import THRESHOLDS_PATH, derive
+
     console = Console()
     with console.status("measuring…") as status:
         calibration = calibrate_gate(directory, on_asset=lambda n: status.update(f"measuring {n}"))

@@ -6,14 +6,16 @@ Registered in cli/main.py as `eval_app.command("motion")(eval_motion.eval_motion
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from cli.eval_output import print_table_and_problems, write_report_json
-from simcore.evaluation.motion_eval import MotionEvaluation, evaluate_motion
+
+if TYPE_CHECKING:  # the evaluation imports the motion pipeline: loaded when the command runs, not with every `rigforge` call
+    from simcore.evaluation.motion_eval import MotionEvaluation
 
 
 def _fmt(value: float | None, digits: int) -> str:
@@ -50,6 +52,8 @@ def eval_motion(
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
 ) -> None:
     """Retarget each character's own clip onto our predicted rig and compare with the artist's animation."""
+    from simcore.evaluation.motion_eval import evaluate_motion
+
     console = Console()
     with console.status("retargeting…") as status:
         report = evaluate_motion(directory, use_predicted=not artist_only, only=set(only) if only else None,

@@ -8,14 +8,16 @@ parent is the default --peers.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from cli.eval_output import print_table_and_problems, write_report_json
-from simcore.evaluation.skin_eval import OUR_METHODS, SkinEvaluation, SkinRow, evaluate_skinning
+
+if TYPE_CHECKING:  # the evaluation imports torch: loaded when the command runs, not with every `rigforge` call
+    from simcore.evaluation.skin_eval import SkinEvaluation, SkinRow
 
 DEFAULT_PEERS = Path("bench/results/peers")
 
@@ -84,6 +86,8 @@ def eval_skin(
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
+    from simcore.evaluation.skin_eval import OUR_METHODS, evaluate_skinning
+
     methods = [m for m in OUR_METHODS if m != "auto"] if method == "all" else [method]
     console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:

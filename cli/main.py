@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from cli import eval_gate, eval_motion, eval_skeleton, eval_skin, fit, keys, rig, server, submit, train, validate
+from cli import eval_gate, eval_motion, eval_skeleton, eval_skin, fit, jobs, keys, rig, server, submit, train, validate
 
 app = typer.Typer(help="RigForge: automatic rigging and skinning.", no_args_is_help=True, pretty_exceptions_enable=False)
 eval_app = typer.Typer(help="Quality evaluations on a directory of rigged assets.", no_args_is_help=True)
@@ -15,6 +15,7 @@ app.command()(server.migrate)
 app.add_typer(keys.app, name="keys")
 app.command()(rig.rig)
 app.command()(submit.submit)
+app.add_typer(jobs.app, name="jobs")
 app.command()(validate.validate)
 app.command()(fit.fit)
 app.add_typer(eval_app, name="eval")

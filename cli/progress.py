@@ -1,4 +1,4 @@
-"""A rich progress bar fed with (stage, fraction) updates."""
+"""Progress for long CLI work: a rich bar on a terminal, one plain line per change elsewhere."""
 
 from __future__ import annotations
 
@@ -11,9 +11,21 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskProgressC
 
 @contextmanager
 def stage_bar(title: str) -> Iterator:
-    """Yields update(stage, fraction 0..1)."""
+    """Yields update(stage, fraction 0..1): a bar on a terminal, else one plain line per stage change (CI logs, files)."""
+    console = Console()
+    if not console.is_terminal:
+        last: str | None = None
+
+        def line(stage: str, fraction: float) -> None:
+            nonlocal last
+            if stage != last:
+                last = stage
+                print(f"{title} {stage} {fraction:.0%}", flush=True)
+
+        yield line
+        return
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TaskProgressColumn(), TextColumn("{task.fields[stage]}"),
-                  TimeElapsedColumn(), transient=False) as bar:
+                  TimeElapsedColumn(), transient=False, console=console) as bar:
         task = bar.add_task(title, total=1.0, stage="")
 
         def update(stage: str, fraction: float) -> None:

@@ -1,4 +1,4 @@
-"""`rigforge submit INPUT... --url --key`: the HTTP client a studio's CI calls.
+"""`rigforge submit INPUT...`: the HTTP client a studio's CI calls (service and key as cli.service_client finds them).
 
 One mesh: prints the job id; `--wait` follows it with a progress bar, `-o DIR` downloads its artifacts.
 Several meshes or a folder (its .glb/.gltf/.zip/.obj/.ply/.stl files, sorted): at most `--concurrency` jobs in
@@ -9,7 +9,6 @@ artifacts in `DIR/<file stem>/`; the exit status is 1 when any job did not succe
 from __future__ import annotations
 
 import hashlib
-import json
 import uuid
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -22,17 +21,10 @@ import httpx
 import typer
 
 from cli.progress import count_bar, stage_bar
+from cli.service_client import KeyOption, ServiceError, UrlOption, api_key, follow_job, problem_message, service_url
 
 MESH_SUFFIXES = (".glb", ".gltf", ".zip", ".obj", ".ply", ".stl")
 ClientFactory = Callable[[str], httpx.Client]  # idempotency key → a client for one job
-
-
-class SubmitError(Exception):
-    """A job that could not be submitted or followed; `exit_code` 2 when the service is unreachable."""
-
-    def __init__(self, message: str, exit_code: int = 1):
-        super().__init__(message)
-        self.exit_code = exit_code
 
 
 @dataclass
@@ -53,21 +45,8 @@ def _fail(message: str, code: int = 1) -> typer.Exit:
     return typer.Exit(code)
 
 
-def _problem(response: httpx.Response) -> str:
-    try:
-        body = response.json()
-        return f"HTTP {response.status_code} [{body.get('code')}]{' ' + body['field'] if body.get('field') else ''}: {body.get('detail')}"
-    except ValueError:
-        return f"HTTP {response.status_code}: {response.text[:300]}"
-
-
 def _events(client: httpx.Client, job: dict, update: Callable[[str, float], None]) -> dict:
-    with client.stream("GET", f"/api/v1/jobs/{job['id']}/events", timeout=None) as stream:
-        for line in stream.iter_lines():
-            if line.startswith("data: "):
-                job = json.loads(line[6:])
-                update(job.get("stage") or job["status"], job["progress"])
-    return job
+    return follow_job(client, job, lambda change: update(change.get("stage") or change["status"], change["progress"]))
 
 
 def follow(client: httpx.Client, job: dict) -> dict:
@@ -79,7 +58,7 @@ def follow(client: httpx.Client, job: dict) -> dict:
 def post_job(client: httpx.Client, mesh: Path, motion: Path | None, options: str | None,
              skeleton: Path | None = None, source_job: str | None = None) -> dict:
     """Upload one mesh (and motion, or an edited skeleton.json), streamed from disk; returns the queued job.
-    Raises SubmitError."""
+    Raises ServiceError."""
     data = {k: v for k, v in (("options", options), ("source_job", source_job)) if v}
     with ExitStack() as stack:
         files = {field: (path.name, stack.enter_context(path.open("rb")))
@@ -87,9 +66,9 @@ def post_job(client: httpx.Client, mesh: Path, motion: Path | None, options: str
         try:
             response = client.post("/api/v1/jobs", files=files, data=data or None)
         except httpx.HTTPError as exc:
-            raise SubmitError(f"cannot reach {client.base_url}: {exc}", 2) from exc
+            raise ServiceError(f"cannot reach {client.base_url}: {exc}", 2) from exc
     if response.status_code != 202:
-        raise SubmitError(_problem(response))
+        raise ServiceError(problem_message(response))
     return response.json()
 
 
@@ -121,11 +100,14 @@ def _batch_job(make_client: ClientFactory, key: str, mesh: Path, motion: Path | 
     with make_client(key) as client:
         try:
             job = post_job(client, mesh, motion, options)
-        except SubmitError as exc:
+        except ServiceError as exc:
             return BatchResult(mesh, None, "rejected", str(exc))
         if not wait:
             return BatchResult(mesh, job["id"], job["status"])
-        job = _events(client, job, lambda stage, fraction: None)
+        try:
+            job = _events(client, job, lambda stage, fraction: None)
+        except ServiceError as exc:
+            return BatchResult(mesh, job["id"], "lost", str(exc))
         if job["status"] != "succeeded":
             err = job.get("error") or {}
             return BatchResult(mesh, job["id"], job["status"], f"[{err.get('code')}] {err.get('message')}")
@@ -157,8 +139,8 @@ def run_batch(make_client: ClientFactory, meshes: list[Path], *, motion: Path | 
 
 def submit(
     inputs: Annotated[list[Path], typer.Argument(exists=True, help="mesh files or folders of them")],
-    url: Annotated[str, typer.Option(envvar="RIGFORGE_URL", help="service URL, e.g. http://127.0.0.1:8000")],
-    key: Annotated[str, typer.Option(envvar="RIGFORGE_KEY", help="API key")],
+    url: UrlOption = None,
+    key: KeyOption = None,
     motion: Annotated[Path | None, typer.Option(exists=True, dir_okay=False, help="motion clip (for every mesh)")] = None,
     options: Annotated[str | None, typer.Option(help="JobOptions as JSON")] = None,
     wait: Annotated[bool, typer.Option("--wait", help="follow the jobs to their end")] = False,
@@ -174,9 +156,14 @@ def submit(
     if not meshes:
         raise _fail("no mesh files found (.glb .gltf .zip .obj .ply .stl)")
 
+    try:
+        base, secret = service_url(url), api_key(key)
+    except ServiceError as exc:
+        raise _fail(f"error: {exc}", exc.exit_code) from None
+
     def make_client(idem: str) -> httpx.Client:
-        headers = {"Authorization": f"Bearer {key}", "Idempotency-Key": idem}
-        return httpx.Client(base_url=url.rstrip("/"), headers=headers, timeout=httpx.Timeout(30, read=600))
+        headers = {"Authorization": f"Bearer {secret}", "Idempotency-Key": idem}
+        return httpx.Client(base_url=base, headers=headers, timeout=httpx.Timeout(30, read=600))
 
     if len(inputs) == 1 and not inputs[0].is_dir():
         _submit_one(make_client(idempotency_key or str(uuid.uuid4())), meshes[0], motion, options, wait, output,
@@ -203,12 +190,15 @@ def _submit_one(client: httpx.Client, mesh: Path, motion: Path | None, options: 
     with client:
         try:
             job = post_job(client, mesh, motion, options, skeleton, source_job)
-        except SubmitError as exc:
+        except ServiceError as exc:
             raise _fail(str(exc), exc.exit_code) from exc
         typer.echo(job["id"])
         if not (wait or output):
             return
-        job = follow(client, job)
+        try:
+            job = follow(client, job)
+        except ServiceError as exc:
+            raise _fail(str(exc), exc.exit_code) from exc
         if job["status"] != "succeeded":
             err = job.get("error") or {}
             raise _fail(f"job {job['status']}: [{err.get('code')}] {err.get('message')}")
