@@ -181,7 +181,15 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     import os
 
     max_vertices = int(os.environ.get("RIGFORGE_MAX_VERTICES", DEFAULT_MAX_VERTICES))
-    state.mesh = ingest(data, state.inputs.mesh_format, up_axis=opts.up_axis, units=opts.units, max_vertices=max_vertices)
+    from simcore.motion_rig.upload import read_sequence_upload, sequence_in_mesh_frame
+
+    fmt = state.inputs.mesh_format
+    sequence = read_sequence_upload(data, fmt, opts.motion.fps, required=opts.skeleton == "from_motion")
+    if sequence is not None:  # the bind mesh is the sequence's own mesh (a zip of frames: its first frame)
+        data, fmt = sequence.mesh_data, sequence.mesh_format
+    state.mesh = ingest(data, fmt, up_axis=opts.up_axis, units=opts.units, max_vertices=max_vertices)
+    if sequence is not None:
+        state.mesh_sequence = sequence_in_mesh_frame(sequence.sequence, state.mesh)
     (state.workdir / "mesh.glb").write_bytes(state.mesh.glb)
     state.artifacts["mesh.glb"] = state.workdir / "mesh.glb"
     stats = dict(state.mesh.stats)

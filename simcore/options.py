@@ -49,7 +49,10 @@ class RefineOptions(_Strict):
 class JobOptions(_Strict):
     """Everything a job can be asked to do; every field has a working default."""
 
-    skeleton: Literal["auto", "geometric", "humanoid", "learned", "keep"] = "auto"
+    skeleton: Literal["auto", "geometric", "humanoid", "learned", "keep", "from_motion"] = Field(
+        "auto", description="from_motion: recover skeleton, weights and animation from a mesh-sequence upload "
+                            "(what auto does for a sequence); max_joints given sets its bone count",
+    )
     max_joints: int = Field(64, ge=2, le=256)
     up_axis: Axis | None = Field(None, description="override the input's up axis (glTF input is +Y up)")
     forward_axis: Axis | None = Field(None, description="override the facing direction used by the humanoid fit")

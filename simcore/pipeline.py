@@ -21,6 +21,7 @@ if TYPE_CHECKING:
 
     from simcore.budgets import Budgets
     from simcore.ingest import IngestedMesh
+    from simcore.io.gltf_morph_sequence import MeshSequence
     from simcore.motion.types import JointAnimation
     from simcore.skeleton.types import Skeleton
     from simcore.stage_clock import StageClock
@@ -55,6 +56,7 @@ class PipelineState:
     ground_faces: np.ndarray | None = None  # (F,) bool: ground-plane triangles, left out of skeleton and skinning
     weights: sp.csr_matrix | None = None  # (V, J) float32, rows sum to 1
     animation: JointAnimation | None = None
+    mesh_sequence: MeshSequence | None = None  # (T, V, 3) frames of a mesh-sequence upload, in the mesh's frame
     refined_frames: np.ndarray | None = None  # (T, V, 3) float32 simulated vertex positions
     stage: str = "ingest"  # the stage running now: where warnings come from
 
@@ -85,14 +87,21 @@ class StageProgress:
             self._clock.check()
 
 
-def _stages() -> list[tuple[str, float, Callable[[PipelineState, StageProgress], None]]]:
-    """(name, relative cost, run) in execution order; imported lazily so the API never loads torch."""
+def _stages(from_motion: bool = False) -> list[tuple[str, float, Callable[[PipelineState, StageProgress], None]]]:
+    """(name, relative cost, run) in execution order; imported lazily so the API never loads torch.
+
+    from_motion: the upload is a mesh sequence rigged from its motion (simcore.motion_rig), whose one stage
+    stands in for skeleton, skin and motion."""
     from simcore import export_stage, ingest
     from simcore.motion import stage as motion_stage
     from simcore.mpm import refine_stage
     from simcore.skeleton import stage as skeleton_stage
     from simcore.skinning import stage as skin_stage
 
+    if from_motion:
+        from simcore.motion_rig import stage as motion_rig_stage
+
+        return [("ingest", 1.0, ingest.run), ("skeleton", 3.0, motion_rig_stage.run), ("export", 1.0, export_stage.run)]
     return [
         ("ingest", 1.0, ingest.run),
         ("skeleton", 1.0, skeleton_stage.run),
@@ -140,7 +149,8 @@ def _run_stages(state: PipelineState, on_progress: ProgressCallback, check_cance
     total = sum(cost for _, cost, _ in stages)
     done = 0.0
     timings: dict[str, float] = {}
-    for name, cost, run in stages:
+    while stages:
+        name, cost, run = stages.pop(0)
         check_cancel()
         started = time.perf_counter()
         on_progress(name, done / total)
@@ -165,4 +175,7 @@ def _run_stages(state: PipelineState, on_progress: ProgressCallback, check_cance
             raise error
         timings[name] = round(time.perf_counter() - started, 3)
         done += cost
+        if name == "ingest" and state.mesh_sequence is not None and state.options.skeleton in ("auto", "from_motion"):
+            stages = [s for s in _stages(from_motion=True)[1:] if wanted is None or s[0] in wanted]
+            total = done + sum(c for _, c, _ in stages)
     state.report["timings_s"] = timings

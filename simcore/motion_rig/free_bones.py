@@ -1,0 +1,100 @@
+"""Free rigid bones, sparse weights and per-frame bone transforms from Dem Bones (SSDR, `py-dem-bones`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from simcore.errors import SimcoreError
+
+
+class MotionRigUnavailable(SimcoreError):
+    """The Dem Bones solver (`py-dem-bones`) is not installed on this worker."""
+
+    code = "motion_rig_unavailable"
+
+
+@dataclass
+class BoneFit:
+    """An LBS fit of a mesh sequence.
+
+    weights:    (V, B) float64, rows sum to 1, at most `max_influences` non-zeros per row.
+    transforms: (T, B, 4, 4) float64 rigid bone transforms from the rest pose to frame t (column vectors).
+    """
+
+    weights: np.ndarray
+    transforms: np.ndarray
+
+    @property
+    def num_bones(self) -> int:
+        return int(self.weights.shape[1])
+
+
+def _solver_module():  # noqa: ANN202 - the native module has no stubs
+    try:
+        from py_dem_bones import portable
+    except ImportError as exc:
+        raise MotionRigUnavailable("rigging from motion needs py-dem-bones (pip install py-dem-bones)") from exc
+    return portable
+
+
+def _prepared(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, bones: int, max_influences: int,
+              iterations: int):  # noqa: ANN202
+    portable = _solver_module()
+    solver = portable._prepare_solver(rest, frames, int(bones), faces=faces, max_influences=max_influences,
+                                      iterations=iterations)
+    return portable, solver
+
+
+def _one_thread():  # noqa: ANN202
+    """Dem Bones' OpenMP threads busy-wait; on cores shared with other work they stall each other (run on one)."""
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(1, user_api="openmp")
+
+
+def solve_free_bones(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, bones: int, *,
+                     max_influences: int, iterations: int) -> BoneFit:
+    """Dem Bones from scratch: up to `bones` free rigid bones (it may return fewer), weights and transforms.
+
+    rest: (V, 3) bind pose; frames: (T, V, 3) the sequence, same vertex order; faces: (F, 3) int.
+    """
+    portable, solver = _prepared(rest, frames, faces, bones, max_influences, iterations)
+    with _one_thread():
+        solver.compute()
+    result = portable._read_skinning_result(solver)
+    return _compact(BoneFit(result.weights.T.copy(), result.transforms))
+
+
+def solve_weights(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, fit: BoneFit, *, max_influences: int,
+                  iterations: int) -> np.ndarray:
+    """(V, B) weights re-solved by Dem Bones for the fixed `fit.transforms`, starting from `fit.weights`."""
+    portable, solver = _prepared(rest, frames, faces, fit.num_bones, max_influences, iterations)
+    solver.m = portable._pack_transformations(fit.transforms)
+    solver.lockM = np.ones(fit.num_bones, np.int32)  # transforms stay as given: only weights move
+    solver.set_weights(np.ascontiguousarray(fit.weights.T))
+    with _one_thread():
+        solver.compute()
+    return np.asarray(solver.get_weights(), dtype=np.float64).T.copy()
+
+
+def _compact(fit: BoneFit) -> BoneFit:
+    """Drop bones that weigh no vertex (Dem Bones may leave some empty)."""
+    used = fit.weights.max(axis=0) > 0
+    return BoneFit(fit.weights[:, used], fit.transforms[:, used])
+
+
+def reconstruct(rest: np.ndarray, weights: np.ndarray, transforms: np.ndarray) -> np.ndarray:
+    """(T, V, 3) LBS of `rest` (V, 3) by `weights` (V, B) and `transforms` (T, B, 4, 4)."""
+    out = np.zeros((transforms.shape[0], len(rest), 3))
+    for b in range(weights.shape[1]):  # bone by bone over its own vertices: memory stays (T, V, 3)
+        on = np.flatnonzero(weights[:, b])
+        moved = np.einsum("tij,vj->tvi", transforms[:, b, :3, :3], rest[on]) + transforms[:, b, None, :3, 3]
+        out[:, on] += weights[on, b, None] * moved
+    return out
+
+
+def rmse(reconstructed: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """(T,) per-frame root-mean-square vertex distance between two (T, V, 3) sequences."""
+    return np.sqrt(((reconstructed - frames) ** 2).sum(-1).mean(-1))

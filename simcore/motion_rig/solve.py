@@ -1,0 +1,159 @@
+"""Rig a mesh sequence: free bones (Dem Bones) → joint tree → bone motion and weights re-fitted on the tree."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from simcore.motion.types import JointAnimation
+from simcore.motion_rig.connected_solve import connected_transforms
+from simcore.motion_rig.free_bones import BoneFit, reconstruct, rmse, solve_free_bones, solve_weights
+from simcore.motion_rig.hierarchy import bone_tree
+from simcore.motion_rig.joint_animation import joint_animation
+from simcore.motion_rig.joints import bone_pairs
+from simcore.motion_rig.sequence_weld import seam_triangles
+from simcore.skeleton.types import Skeleton
+
+Progress = Callable[[float], None]
+
+
+@dataclass(frozen=True)
+class MotionRigParams:
+    """How a sequence is rigged.
+
+    bones: a fixed bone count; None chooses it: the smallest of `search_counts` (and `max_bones`) whose free-bone
+    fit reaches `target_rmse` (a share of the first frame's bounding-box diagonal), else `max_bones`.
+    """
+
+    max_influences: int = 4
+    bones: int | None = None
+    max_bones: int = 64
+    target_rmse: float = 0.005
+    search_counts: tuple[int, ...] = (8, 16, 32, 48, 64, 96, 128, 192, 256)
+    search_iterations: int = 10  # Dem Bones iterations while choosing the count
+    iterations: int = 30  # Dem Bones iterations of the chosen count's fit
+    spread: int = 2  # 1-ring steps that make neighbouring bones' regions meet
+    pivot_regularisation: float = 3e-4
+    slide_mismatch: float = 0.01  # share of the diagonal: a bone pair that far from turning about a point slides
+    sweeps: int = 4  # tree transform sweeps per round
+    rounds: int = 2  # transform ↔ weight alternations on the tree
+    weight_iterations: int = 2
+
+
+@dataclass
+class MotionRig:
+    """The recovered rig: skeleton (rest = `rest`), weights (V, J) float32 CSR rows summing to 1, its animation,
+    and `report` (bone count, per-frame RMSE of the rig and of free bones in units of the first frame's
+    bounding-box diagonal, times)."""
+
+    skeleton: Skeleton
+    weights: sp.csr_matrix
+    animation: JointAnimation
+    report: dict[str, Any] = field(default_factory=dict)
+
+
+def _counts(params: MotionRigParams) -> list[int]:
+    if params.bones is not None:
+        return [params.bones]
+    return sorted({c for c in params.search_counts if c < params.max_bones} | {params.max_bones})
+
+
+def _error(rest: np.ndarray, frames: np.ndarray, fit: BoneFit) -> float:
+    """RMSE over every frame and vertex, in units of the first frame's bounding-box diagonal."""
+    diag = float(np.linalg.norm(np.ptp(frames[0], axis=0)))
+    return float(np.sqrt((rmse(reconstruct(rest, fit.weights, fit.transforms), frames) ** 2).mean())) / diag
+
+
+def _free_fit(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, seams: np.ndarray, count: int,
+              params: MotionRigParams, iterations: int) -> BoneFit:
+    """Dem Bones on the surface with its seams closed; on the upload's own triangles when that stalls.
+
+    Dem Bones grows bones by splitting clusters over the surface, which can stall on the joined surface of a
+    model built from overlapping pieces; the better of both fits is kept then.
+    """
+    surface = np.concatenate([faces, seams]) if len(seams) else faces
+    fit = solve_free_bones(rest, frames, surface, count, max_influences=params.max_influences, iterations=iterations)
+    if fit.num_bones >= count or not len(seams):
+        return fit
+    plain = solve_free_bones(rest, frames, faces, count, max_influences=params.max_influences, iterations=iterations)
+    return plain if _error(rest, frames, plain) < _error(rest, frames, fit) else fit
+
+
+def choose_free_bones(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, seams: np.ndarray,
+                      params: MotionRigParams, progress: Progress) -> tuple[BoneFit, list[dict[str, float]]]:
+    """The free-bone fit at the chosen count (full iterations) and the (count, rmse) trail of the search."""
+    counts = _counts(params)
+    trail: list[dict[str, float]] = []
+    chosen = counts[-1]
+    for i, count in enumerate(counts):
+        if len(counts) == 1:
+            break
+        fit = _free_fit(rest, frames, faces, seams, count, params, params.search_iterations)
+        error = _error(rest, frames, fit)
+        trail.append({"bones": fit.num_bones, "asked": count, "rmse": round(error, 6)})
+        progress(0.5 * (i + 1) / len(counts))
+        if error <= params.target_rmse or fit.num_bones < count:  # good enough, or no more bones to split off
+            chosen = count
+            break
+    return _free_fit(rest, frames, faces, seams, chosen, params, params.iterations), trail
+
+
+def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps: float,
+                    params: MotionRigParams = MotionRigParams(), progress: Progress = lambda f: None,
+                    name: str = "clip") -> MotionRig:
+    """Skeleton, weights and animation that reproduce `frames` by LBS of `rest`.
+
+    rest: (V, 3) float64 bind pose (metres); faces: (F, 3) int64; frames: (T, V, 3) float64, same vertex order.
+    """
+    started = time.perf_counter()
+    rest, frames = np.asarray(rest, np.float64), np.asarray(frames, np.float64)
+    diag = float(np.linalg.norm(np.ptp(frames[0], axis=0)))
+    seams = seam_triangles(frames, faces)
+    free, trail = choose_free_bones(rest, frames, faces, seams, params, progress)
+    free_seconds = time.perf_counter() - started
+    progress(0.6)
+    surface = np.concatenate([faces, seams])
+    pairs = bone_pairs(rest, surface, free.weights, free.transforms, spread=params.spread,
+                       pivot_regularisation=params.pivot_regularisation)
+    tree = bone_tree(rest, free.weights, pairs, params.slide_mismatch * diag)
+    weights, transforms = free.weights[:, tree.order], free.transforms[:, tree.order]
+    joints = tree.joints
+    for r in range(params.rounds + 1):  # transforms, weights, ..., transforms: the last fit is the rig's motion
+        transforms, joints = connected_transforms(rest, frames, weights, tree.parents, joints, tree.floating,
+                                                  transforms, sweeps=params.sweeps,
+                                                  joint_regularisation=params.pivot_regularisation)
+        if r == params.rounds:
+            break
+        weights = solve_weights(rest, frames, surface, BoneFit(weights, transforms),
+                                max_influences=params.max_influences, iterations=params.weight_iterations)
+        progress(0.6 + 0.35 * (r + 1) / params.rounds)
+    weights = weights / np.maximum(weights.sum(axis=1, keepdims=True), 1e-12)
+    names = ["root"] + [f"bone_{i:02d}" for i in range(1, len(tree.order))]
+    skeleton = Skeleton(joints, tree.parents, names).validate()
+    animation = joint_animation(skeleton, transforms, fps, name)
+    rig_error = rmse(reconstruct(rest, weights, transforms), frames) / diag
+    free_error = rmse(reconstruct(rest, free.weights, free.transforms), frames) / diag
+    report = {
+        "bones": skeleton.num_joints,
+        "sliding_joints": int(tree.sliding.sum()),
+        "separate_part_joints": int(tree.floating.sum() - tree.sliding.sum()) - 1,
+        "frames": int(frames.shape[0]),
+        "vertices": int(frames.shape[1]),
+        "seam_links": int(len(seams)),
+        "rmse": round(float(np.sqrt((rig_error**2).mean())), 6),
+        "free_bones_rmse": round(float(np.sqrt((free_error**2).mean())), 6),
+        "rmse_per_frame": np.round(rig_error, 6).tolist(),
+        "free_bones_rmse_per_frame": np.round(free_error, 6).tolist(),
+        "rmse_unit": "first frame's bounding-box diagonal",
+        "count_search": trail,
+        "free_bone_centres": np.round((free.weights.T @ rest) / free.weights.sum(axis=0)[:, None], 6).tolist(),
+        "free_bones_seconds": round(free_seconds, 3),
+        "seconds": round(time.perf_counter() - started, 3),
+    }
+    progress(1.0)
+    return MotionRig(skeleton, sp.csr_matrix(weights.astype(np.float32)), animation, report)
