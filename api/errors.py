@@ -14,6 +14,7 @@ from simcore.errors import InvalidInput, LimitExceeded, SimcoreError, Unsupporte
 log = logging.getLogger("rigforge.api")
 PROBLEM = "application/problem+json"
 TITLES = {400: "Bad Request", 401: "Unauthorized", 403: "Forbidden", 404: "Not Found", 405: "Method Not Allowed", 409: "Conflict",
+          429: "Too Many Requests",
           413: "Content Too Large", 415: "Unsupported Media Type", 422: "Unprocessable Content", 500: "Internal Server Error",
           503: "Service Unavailable"}
 

@@ -33,7 +33,8 @@ from api.webhooks.urls import checked_callback_url
 from simcore.io.json_bounds import JsonTooDeep, loads_bounded
 from simcore.options import JobOptions
 
-router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], dependencies=[Depends(rate_limited)], responses=problem_responses(401))
+router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], dependencies=[Depends(rate_limited)],
+                   responses=problem_responses(401, 429))
 SSE_POLL_SECONDS = 0.3
 # signed download URLs change with their expiry, not with the job: the ETag leaves them out
 VOLATILE = {"artifacts": {"__all__": {"download_url"}}, "download_all_url": True}
@@ -145,7 +146,7 @@ def list_jobs(
 
 
 @router.get("/{job_id}", response_model=JobOut, summary="One job's status, progress, error and artifacts",
-            responses=problem_responses(404, 422))
+            responses={304: {"description": "Not Modified: the job is as the If-None-Match ETag says"}, **problem_responses(404, 422)})
 def get_job(request: Request, job: OwnedJob,
             if_none_match: Annotated[str | None, Header(alias="If-None-Match", description="an ETag from an earlier answer: "
                                                         "304 when the job has not changed")] = None) -> Response:

@@ -21,7 +21,8 @@ from api.models import ApiKey
 from api.problem_schema import problem_responses
 from api.ratelimit import rate_limited
 
-router = APIRouter(prefix="/api/v1/keys", tags=["keys"], dependencies=[Depends(rate_limited)], responses=problem_responses(401))
+router = APIRouter(prefix="/api/v1/keys", tags=["keys"], dependencies=[Depends(rate_limited)],
+                   responses=problem_responses(401, 429))
 
 
 class KeyOut(BaseModel):

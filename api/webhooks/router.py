@@ -14,11 +14,13 @@ from pydantic import BaseModel, Field
 from api.auth import CurrentKey
 from api.db import session_scope
 from api.models import ApiKey
+from api.problem_schema import problem_responses
 from api.ratelimit import rate_limited
 from api.webhooks.signing import new_secret
 from api.webhooks.urls import checked_callback_url
 
-router = APIRouter(prefix="/api/v1/keys/me/webhook", tags=["keys"], dependencies=[Depends(rate_limited)])
+router = APIRouter(prefix="/api/v1/keys/me/webhook", tags=["keys"], dependencies=[Depends(rate_limited)],
+                   responses=problem_responses(401, 429))
 
 
 class WebhookConfig(BaseModel):
@@ -46,7 +48,8 @@ def get_key_webhook(key: CurrentKey) -> WebhookConfig:
     return _config(key.id)
 
 
-@router.put("", response_model=WebhookConfig, summary="Set (or clear with null) this key's default webhook URL")
+@router.put("", response_model=WebhookConfig, summary="Set (or clear with null) this key's default webhook URL",
+            responses=problem_responses(422, examples={422: ("invalid_callback_url", "url must be an http or https URL, not 'ftp'", "url")}))
 def set_key_webhook(body: WebhookUrl, key: CurrentKey) -> WebhookConfig:
     return _config(key.id, url=checked_callback_url(body.url, field="url"), set_url=True)
 
