@@ -1,0 +1,64 @@
+"""The CLI answers a missing database, a missing key or an unreachable service with one clear line, no traceback."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import pytest
+from typer.testing import CliRunner
+
+from api.db import reset_caches
+from api.settings import get_settings
+from cli.main import app
+from cli.progress import stage_bar
+from tests.integration.conftest import free_port
+
+
+@pytest.fixture
+def elsewhere(tmp_path, monkeypatch):
+    """A shell outside any RigForge checkout: no data directory, no URL or key in the environment."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("RIGFORGE_DATA_DIR", str(tmp_path / ".rigforge"))
+    for name in ("RIGFORGE_URL", "RIGFORGE_API_KEY", "RIGFORGE_KEY", "RIGFORGE_DATABASE_URL"):
+        monkeypatch.delenv(name, raising=False)
+    get_settings.cache_clear()
+    yield tmp_path
+    get_settings.cache_clear()
+    reset_caches()  # forget the engine a keys command opened here
+
+
+def rigforge(*args: str) -> tuple[int, str]:
+    result = CliRunner().invoke(app, list(args))
+    assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
+    return result.exit_code, result.stderr
+
+
+def test_keys_outside_the_service_say_where_to_run_and_create_nothing(elsewhere):
+    code, err = rigforge("keys", "list")
+    assert code == 1 and err.startswith("error: no RigForge database at ") and "RIGFORGE_DATABASE_URL" in err
+    assert "Traceback" not in err and not (elsewhere / ".rigforge").exists()
+
+
+def test_keys_on_an_unmigrated_database_say_to_migrate(elsewhere):
+    (elsewhere / ".rigforge").mkdir()
+    sqlite3.connect(elsewhere / ".rigforge" / "rigforge.db").close()
+    code, err = rigforge("keys", "create", "--name", "ci")
+    assert code == 1 and "no such table: api_keys" in err and "`rigforge migrate`" in err
+
+
+def test_jobs_without_a_key_say_how_to_give_one(elsewhere):
+    code, err = rigforge("jobs", "list")
+    assert code == 1 and err.startswith("error: no API key: pass --key, set RIGFORGE_API_KEY")
+
+
+def test_an_unreachable_service_exits_2_naming_it(elsewhere):
+    url = f"http://127.0.0.1:{free_port()}"
+    code, err = rigforge("jobs", "get", "some-job", "--url", url, "--key", "rf_x")
+    assert code == 2 and err.startswith(f"error: cannot reach {url}")
+
+
+def test_progress_off_a_terminal_is_one_line_per_stage_change(capsys):
+    with stage_bar("job 1234") as update:
+        for stage, fraction in [("queued", 0.0), ("ingest", 0.1), ("ingest", 0.2), ("skeleton", 0.4), ("skeleton", 0.5)]:
+            update(stage, fraction)
+    assert capsys.readouterr().out.splitlines() == ["job 1234 queued 0%", "job 1234 ingest 10%", "job 1234 skeleton 40%"]
