@@ -6,7 +6,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, Field, SecretStr, model_validator
+from pydantic import BaseModel, Field, SecretStr, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from simcore.budgets import Budgets
@@ -78,6 +78,15 @@ class Settings(BaseSettings):
                                            "default the Redis broker, else this process's memory")
     log_format: Literal["text", "json"] = Field("text", description="json: one JSON object per log line, with job_id where known")
     budgets: Budgets = Field(default_factory=Budgets, description="per-job time, memory and sampling budgets")
+
+    @field_validator("rate_limit")
+    @classmethod
+    def _rate_limit_parses(cls, value: str) -> str:
+        if value.strip():
+            from limits import parse_many
+
+            parse_many(value)  # ValueError names the item it cannot read
+        return value
 
     @model_validator(mode="after")
     def _resolve(self) -> Settings:
