@@ -13,12 +13,3 @@ export function setKey(secret: string): void {
 export function clearKey(): void {
   localStorage.removeItem(STORAGE_KEY);
 }
-
-/** `url` with `?key=` appended: for EventSource and download links, which cannot send headers. */
-export function withKey(url: string): string {
-  const key = getKey();
-  if (!key) return url;
-  const u = new URL(url, location.href);
-  u.searchParams.set("key", key);
-  return u.pathname + u.search;
-}

@@ -1,7 +1,7 @@
 // Job detail: live status, artifacts, report tables and the 3D viewer (loaded on demand with three.js).
 import { ApiError, api, type Job } from "../api/client";
 import { isTerminal, watchJob } from "../api/job_watch";
-import { withKey } from "../api/session";
+import { followFreshLink } from "../api/downloads";
 import { jobSummary } from "../report/job_summary";
 import { reportTables, type Report } from "../report/report_tables";
 import { h, replace } from "../ui/dom";
@@ -43,8 +43,8 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
       try { renderHead(await api.cancelJob(job.id)); } catch (e) { if (e instanceof ApiError) alert(e.message); }
     } }, "Cancel job") : null;
     const finishedActions = isTerminal(job) ? [
-      job.artifacts.length ? h("a", { class: "button", id: "download-all", href: withKey(`/api/v1/jobs/${job.id}/artifacts.zip`),
-        download: `rigforge-${job.id}.zip` }, "Download all (zip)") : null,
+      job.download_all_url ? h("a", { class: "button", id: "download-all", href: job.download_all_url, download: `rigforge-${job.id}.zip`,
+        onclick: followFreshLink(job.id, (j) => j.download_all_url, `rigforge-${job.id}.zip`) }, "Download all (zip)") : null,
       h("button", { type: "button", id: "rerun-job", onclick: async () => {
         try { location.hash = `#/jobs/${(await api.rerunJob(job.id)).id}`; } catch (e) { if (e instanceof ApiError) alert(e.message); }
       } }, "Re-run"),
@@ -92,7 +92,8 @@ export function jobDetailPage(root: HTMLElement, id: string): () => void {
       h("tbody", {}, ...job.artifacts.map((a) => h("tr", {},
         h("td", {}, a.name), h("td", { class: "muted" }, a.media_type), h("td", { class: "num" }, bytes(a.size)),
         h("td", {}, h("code", { title: a.sha256 }, `${a.sha256.slice(0, 12)}…`)),
-        h("td", {}, h("a", { href: withKey(a.url), download: a.name, "aria-label": `Download ${a.name}` }, "Download")))))));
+        h("td", {}, h("a", { href: a.download_url, download: a.name, "aria-label": `Download ${a.name}`,
+          onclick: followFreshLink(job.id, (j) => j.artifacts.find((x) => x.name === a.name)?.download_url, a.name) }, "Download")))))));
   }
 
   async function renderResults(job: Job): Promise<void> {

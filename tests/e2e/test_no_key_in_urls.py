@@ -1,0 +1,65 @@
+"""The dashboard never puts the API key in a URL: it follows a job's events with fetch and the Authorization header,
+and downloads by the signed links in the job's JSON (a fresh one asked for at each click)."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import httpx
+import pytest
+
+from tests.e2e.conftest import ARTIFACTS
+from tests.e2e.test_dashboard import sign_in
+
+pytestmark = pytest.mark.browser
+INGEST_ONLY = '{"stages": []}'
+
+
+def _finished_ingest_job(server, dev_assets) -> dict:
+    with httpx.Client(base_url=server.url, headers={"Authorization": f"Bearer {server.local_key}"}, timeout=60) as client:
+        job = client.post("/api/v1/jobs", files={"mesh": ("fox.glb", (dev_assets / "fox.glb").read_bytes())},
+                          data={"options": INGEST_ONLY}).json()
+        deadline = time.monotonic() + 120
+        while job["status"] in ("queued", "running") and time.monotonic() < deadline:
+            time.sleep(0.3)
+            job = client.get(f"/api/v1/jobs/{job['id']}").json()
+    assert job["status"] == "succeeded", job
+    return job
+
+
+def test_events_by_header_and_downloads_by_signed_link(page, dashboard_server, dev_assets):
+    job = _finished_ingest_job(dashboard_server, dev_assets)
+    key = dashboard_server.local_key
+    requests: list = []
+    page.on("request", lambda r: requests.append(r))
+    served_as_queued: list[str] = []
+
+    def first_read_as_queued(route) -> None:  # the page then follows the job's events to its end
+        if served_as_queued:
+            route.continue_()
+            return
+        served_as_queued.append(route.request.url)
+        route.fulfill(status=200, content_type="application/json",
+                      body=json.dumps({**job, "status": "queued", "stage": None, "progress": 0.0, "finished_at": None,
+                                       "artifacts": [], "download_all_url": None}))
+
+    page.route(f"**/api/v1/jobs/{job['id']}", first_read_as_queued)
+    sign_in(page, key)
+    page.goto(f"/#/jobs/{job['id']}")
+    page.wait_for_selector("#job-head .badge[data-status=succeeded]", timeout=60_000)
+    events = [r for r in requests if r.url.endswith(f"/api/v1/jobs/{job['id']}/events")]
+    assert served_as_queued and events and events[0].headers.get("authorization") == f"Bearer {key}"
+
+    link = page.get_attribute("a[aria-label='Download mesh.glb']", "href")
+    assert "/api/v1/files/" in link and "sig=" in link
+    with page.expect_download() as info:
+        page.click("a[aria-label='Download mesh.glb']")
+    saved = ARTIFACTS / "downloaded-signed-mesh.glb"
+    info.value.save_as(saved)
+    assert saved.read_bytes()[:4] == b"glTF"
+    with page.expect_download() as info:
+        page.click("#download-all")
+    assert info.value.suggested_filename == f"rigforge-{job['id']}.zip"
+    assert not [r.url for r in requests if key in r.url]
+    assert not page.console_errors and not page.external_requests
