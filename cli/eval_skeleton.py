@@ -1,4 +1,4 @@
-"""`rigforge eval skeleton DIR [--method M] [--json FILE]`: skeleton metrics over a directory of rigs."""
+"""`rigforge eval skeleton DIR [--method M] [--ablate] [--json FILE]`: skeleton metrics over a directory of rigs."""
 
 from __future__ import annotations
 
@@ -18,6 +18,10 @@ _COLUMNS = ("asset", "category", "method", "J2J", "J2B", "B2B", "joints pred/gt"
 
 def _fmt(value: float | None, digits: int = 4) -> str:
     return "-" if value is None else f"{value:.{digits}f}"
+
+
+def _delta(value: float | None) -> str:
+    return "-" if value is None else f"{value:+.4f}"
 
 
 def _metric_cells(row: dict) -> list[str]:
@@ -51,26 +55,48 @@ def render(report: dict, console: Console) -> None:
         console.print(f"skipped {name}: {reason}")
 
 
+def render_ablation(report: dict, console: Console) -> None:
+    """Print the ablation table: each geometric rule turned off, its mean J2J/B2B and change, assets worse/better."""
+    table = Table("variant", "J2J", "ΔJ2J", "B2B", "ΔB2B", "J2J worse/better", "rule",
+                  title="Geometric rules ablated (job path; Δ > 0: turning the rule off hurts, so the rule helps)")
+    for row in report["table"]:
+        table.add_row(row["variant"], _fmt(row["j2j"]), _delta(row["d_j2j"]), _fmt(row["b2b"]), _delta(row["d_b2b"]),
+                      f"{row['worse']}/{row['better']}", row["rule"])
+    console.print(table)
+    for name, reason in report["skipped"].items():
+        console.print(f"skipped {name}: {reason}")
+
+
 def eval_skeleton(
     dir: Annotated[Path, typer.Argument(help="directory of rigged .glb/.gltf files (MANIFEST.tsv optional)")],
     method: Annotated[str, typer.Option("--method", help="all | voxel | auto | geometric | humanoid | learned")] = "all",
     json_path: Annotated[Path | None, typer.Option("--json", help="write the report as JSON here")] = None,
     max_joints: Annotated[int, typer.Option("--max-joints", help="joint cap for the predicted methods")] = 64,
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
+    ablate: Annotated[bool, typer.Option("--ablate", help="the geometric method with each special-case rule off in turn "
+                                                          "(--method is ignored)")] = False,
 ) -> None:
-    """Score predicted skeletons against each rig's used skin joints: J2J, J2B, B2B, joint counts, inside share."""
+    """Score predicted skeletons against each rig's used skin joints (the job's ingest and prediction): J2J, J2B,
+    B2B, joint counts, inside share; or, with --ablate, what each geometric rule changes."""
+    from simcore.evaluation.skeleton_ablation import ablate_directory
     from simcore.evaluation.skeleton_eval import evaluate_directory
 
     console = Console() if sys.stdout.isatty() else Console(width=170)  # piped output keeps whole rows
     try:
         with console.status("evaluating") as status:
-            evaluation = evaluate_directory(dir, method, max_joints=max_joints, split=split,
-                                            on_asset=lambda name: status.update(f"evaluating {name}"))
+            def on_asset(name: str) -> None:
+                status.update(f"evaluating {name}")
+                if not console.is_terminal:
+                    console.print(f"evaluating {name}")
+
+            if ablate:
+                report = ablate_directory(dir, max_joints=max_joints, split=split, on_asset=on_asset).to_dict()
+            else:
+                report = evaluate_directory(dir, method, max_joints=max_joints, split=split, on_asset=on_asset).to_dict()
     except SimcoreError as exc:
         console.print(f"[red]{exc.code}[/red]: {exc}")
         raise typer.Exit(2) from exc
-    report = evaluation.to_dict()
-    render(report, console)
+    (render_ablation if ablate else render)(report, console)
     if json_path is not None:
         json_path.write_text(json.dumps(report, indent=1))
         console.print(f"wrote {json_path}")

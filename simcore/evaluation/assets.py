@@ -44,6 +44,16 @@ def split_files(directory: Path, split: str) -> list[Path]:
     return sorted(Path(directory) / r["file"].strip() for r in rows)
 
 
+def asset_files(directory: Path, split: str | None = None) -> list[Path]:
+    """The .glb/.gltf files of `directory` by name, or with `split` the files MANIFEST.tsv lists for that split."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise InvalidInput(f"{directory} is not a directory", code="not_a_directory", field="dir")
+    if split:
+        return split_files(directory, split)
+    return sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf"))
+
+
 def rigged_assets(
     directory: Path, skipped: dict[str, str] | None = None, split: str | None = None
 ) -> Iterator[tuple[str, str, GltfDocument, RiggedAsset]]:
@@ -52,12 +62,8 @@ def rigged_assets(
 
     Files that do not read as a rig (no skin, malformed) go to `skipped` as name → "code: message".
     """
-    directory = Path(directory)
-    if not directory.is_dir():
-        raise InvalidInput(f"{directory} is not a directory", code="not_a_directory", field="dir")
     categories = read_categories(directory)
-    files = split_files(directory, split) if split else sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf"))
-    for path in files:
+    for path in asset_files(directory, split):
         try:
             doc = GltfDocument.from_bytes(path.read_bytes())
             asset = read_rigged_asset(doc)

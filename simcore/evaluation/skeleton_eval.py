@@ -1,10 +1,16 @@
 """Skeleton evaluation over a directory of rigged assets (`rigforge eval skeleton DIR`).
 
-For every rigged .glb/.gltf in DIR: ground truth = the used skin joints at bind pose; each method
-predicts a skeleton from the bind-pose mesh alone; `simcore.metrics.skeleton` scores it. Files without
-a skin (e.g. morph-target sequences) are listed as skipped. Categories come from DIR/MANIFEST.tsv
-(`name` or `file` column → `category`) when present, else "unknown". The ground-truth skeletons' token
-counts (naive vs optimised UniRig tokenisation) are reported alongside.
+Each file goes through exactly what a job runs: the job's ingest (units, up axis, rest pose) and its skeleton
+prediction (`simcore.skeleton.stage.predict_for_job`, ground plane left out), with default options and the
+given method, so a figure here is what a user gets. Ground truth = the upload's skin joints that influence a
+vertex (or have a descendant that does), at the rest pose the job sees, in the job's frame; `simcore.metrics.
+skeleton` scores against the ingested mesh. Files without a skin (e.g. morph-target sequences) are listed as
+skipped; a file that fails to load is skipped with its reason, never an aborted run. Categories come from
+DIR/MANIFEST.tsv (`name` or `file` column → `category`) when present, else "unknown". The ground-truth
+skeletons' token counts (naive vs optimised UniRig tokenisation) are reported alongside.
+
+`all` runs the voxel baseline and `auto` once, and also scores the best candidate of each method `auto` chose
+among (humanoid, geometric, thinning, learned): the same skeletons those methods give as job options.
 """
 
 from __future__ import annotations
@@ -13,20 +19,29 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simcore.errors import InvalidInput, SimcoreError
-from simcore.evaluation.assets import problem, read_categories, rigged_assets
+from simcore.errors import InvalidInput
+from simcore.evaluation.assets import asset_files, problem, read_categories
 from simcore.evaluation.voxel_baseline import voxel_skeleton_graph
-from simcore.geometry.voxelize import solid_voxels
-from simcore.io.gltf_rig import RiggedAsset
-from simcore.metrics.skeleton import INSIDE_RESOLUTION, SkeletonScores, graph_scores, ground_truth_skeleton
+from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.io.gltf_rig import used_joints
+from simcore.metrics.skeleton import INSIDE_RESOLUTION, SkeletonScores, graph_scores, used_skeleton
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
+from simcore.skeleton.types import Skeleton
 
-PREDICTED_METHODS = ("auto", "geometric", "humanoid")
-METHODS = ("all", "voxel", *PREDICTED_METHODS, "learned")  # "all" leaves out learned: it needs the trained weights
-__all__ = ["AssetResult", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "read_categories", "resolve_methods"]
+if TYPE_CHECKING:
+    from simcore.geometry.mesh import IngestedMesh
+    from simcore.skeleton.geometric import GeometricParams
+    from simcore.skeleton.predict import SkeletonPrediction
+
+PREDICTED_METHODS = ("auto", "geometric", "humanoid", "learned")
+CANDIDATE_METHODS = ("humanoid", "geometric", "thinning", "learned")  # the rows `all` takes from auto's candidates
+METHODS = ("all", "voxel", *PREDICTED_METHODS)
+__all__ = ["AssetResult", "EvalCase", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "load_case",
+           "read_categories", "resolve_methods"]
 METRIC_KEYS = ("j2j", "j2b", "b2b", "joints_pred", "joints_gt", "joint_ratio", "inside", "seconds")
 
 
@@ -100,73 +115,126 @@ class SkeletonEvaluation:
 
 
 def resolve_methods(method: str) -> list[str]:
-    """The methods a `--method` value stands for ("all" = voxel + every predicted method)."""
+    """The methods a `--method` value stands for ("all" = the voxel baseline and auto, with auto's candidates)."""
     if method not in METHODS:
         raise InvalidInput(f"unknown method {method!r}; use one of {', '.join(METHODS)}", code="invalid_option", field="method")
-    return ["voxel", *PREDICTED_METHODS] if method == "all" else [method]
+    return ["voxel", "auto"] if method == "all" else [method]
 
 
-def _load_predictor() -> Callable | None:
-    try:
-        from simcore.skeleton.predict import predict_skeleton
-    except ImportError:  # the prediction module is optional here: the voxel baseline still runs
-        return None
-    return predict_skeleton
+@dataclass
+class EvalCase:
+    """One uploaded file as a job sees it: the ingested mesh, its ground-plane triangles, the ground truth and
+    the mesh's solid for the inside test."""
+
+    mesh: IngestedMesh
+    ground: np.ndarray
+    gt: Skeleton
+    grid: VoxelGrid
 
 
-def _token_counts(asset: RiggedAsset, gt) -> dict[str, int]:
+def load_case(path: Path) -> EvalCase:
+    """Ingest `path` as a job does (default options) and read its ground truth; InvalidInput no_skin without one."""
+    from simcore.ingest import ingest
+    from simcore.skeleton.stage import mesh_ground
+
+    mesh = ingest(path.read_bytes(), path.suffix.lower().lstrip("."))
+    rig = mesh.source_rig
+    if rig is None:
+        raise InvalidInput(f"{path.name} has no skinned mesh", code="no_skin", field="mesh")
+    gt = used_skeleton(rig.skeleton, used_joints(rig.skeleton, rig.weights))
+    grid = solid_voxels(mesh.vertices, mesh.faces, resolution=INSIDE_RESOLUTION)
+    return EvalCase(mesh, mesh_ground(mesh)[1], gt, grid)
+
+
+def job_prediction(case: EvalCase, method: str, max_joints: int = 64, geometric_params: GeometricParams | None = None
+                   ) -> SkeletonPrediction:
+    """The skeleton a job with options {skeleton: method, max_joints} predicts for the case's upload."""
+    from simcore.options import JobOptions
+    from simcore.skeleton.stage import predict_for_job
+
+    options = JobOptions(skeleton=method, max_joints=max_joints)
+    return predict_for_job(case.mesh, options, case.ground, geometric_params)
+
+
+def _token_counts(case: EvalCase) -> dict[str, int]:
     tokenizer = SkeletonTokenizer(max_length=1 << 20)  # counting only: no context limit
-    plan = tokenizer.plan(gt, Normalization.from_points(np.concatenate([asset.vertices, gt.positions])))
-    return {"joints": gt.num_joints, "naive": tokenizer.naive_length(plan), "optimized": tokenizer.optimized_length(plan)}
+    plan = tokenizer.plan(case.gt, Normalization.from_points(np.concatenate([case.mesh.vertices, case.gt.positions])))
+    return {"joints": case.gt.num_joints, "naive": tokenizer.naive_length(plan), "optimized": tokenizer.optimized_length(plan)}
 
 
-def evaluate_asset(name: str, category: str, asset: RiggedAsset, methods: list[str], max_joints: int = 64) -> list[AssetResult]:
-    """Score every method on one rigged asset (a failing method gives a row with its error)."""
-    gt = ground_truth_skeleton(asset)
-    grid = solid_voxels(asset.vertices, asset.faces, resolution=INSIDE_RESOLUTION)
-    predict = _load_predictor()
+def scores_of(case: EvalCase, skeleton: Skeleton) -> SkeletonScores:
+    """The metrics of `skeleton` (in the job frame) against the case's ground truth."""
+    return graph_scores(skeleton.positions, skeleton.bones(), case.gt, case.mesh.vertices, case.mesh.faces, grid=case.grid)
+
+
+def _candidate_rows(name: str, category: str, case: EvalCase, prediction: SkeletonPrediction) -> list[AssetResult]:
+    """One row per method of CANDIDATE_METHODS from auto's candidates: the skeleton that method gives alone."""
+    from simcore.skeleton.learned import best_of_n
+
+    pool = prediction.candidates
+    totals = [c["total"] for c in prediction.report["auto"]["candidates"]]
+    shape_seconds = prediction.report["timings_s"].get("shape", 0.0)
+    rows = []
+    for method in CANDIDATE_METHODS:
+        members = [k for k, c in enumerate(pool) if c.method == method]
+        if not members:
+            note = prediction.report.get("learned_unavailable") if method == "learned" else "n/a: no biped fitted"
+            rows.append(AssetResult(name, category, method, None, 0.0, note=note))
+            continue
+        k = best_of_n(pool, totals) if method == "learned" else members[0]
+        seconds = sum(pool[m].seconds for m in members) + (shape_seconds if method == "learned" else 0.0)
+        rows.append(AssetResult(name, category, method, scores_of(case, pool[k].skeleton), seconds))
+    return rows
+
+
+def evaluate_asset(name: str, category: str, case: EvalCase, methods: list[str], max_joints: int = 64,
+                   geometric_params: GeometricParams | None = None, candidate_rows: bool = False) -> list[AssetResult]:
+    """Score every method on one case (a failing method gives a row with its error); with `candidate_rows`, `auto`
+    also gives a row per candidate method (CANDIDATE_METHODS)."""
     rows: list[AssetResult] = []
     for method in methods:
         started = time.perf_counter()
-        note = None
         try:
             if method == "voxel":
-                joints, edges = voxel_skeleton_graph(asset.vertices, asset.faces)
-            elif predict is None:
-                raise InvalidInput("simcore.skeleton.predict is not available", code="method_unavailable", field="method")
-            else:
-                prediction = predict(asset.vertices, asset.faces, method=method, max_joints=max_joints)
-                if method == "humanoid" and prediction.method != "humanoid":
-                    # The auto and geometric rows already cover a fallback; do not count it as humanoid.
-                    note = f"n/a: no biped fitted ({prediction.method} instead)"
-                    rows.append(AssetResult(name, category, method, None, time.perf_counter() - started, note=note))
-                    continue
-                joints, edges = prediction.skeleton.positions, prediction.skeleton.bones()
-                note = None if method != "auto" else f"chose {prediction.method}"
+                joints, edges = voxel_skeleton_graph(case.mesh.vertices, case.mesh.faces)
+                scores = graph_scores(joints, edges, case.gt, case.mesh.vertices, case.mesh.faces, grid=case.grid)
+                rows.append(AssetResult(name, category, method, scores, time.perf_counter() - started))
+                continue
+            prediction = job_prediction(case, method, max_joints, geometric_params)
             seconds = time.perf_counter() - started
-            scores = graph_scores(joints, edges, gt, asset.vertices, asset.faces, grid=grid)
-            rows.append(AssetResult(name, category, method, scores, seconds, note=note))
+            if method == "humanoid" and prediction.method != "humanoid":
+                # The auto and geometric rows already cover a fallback; do not count it as humanoid.
+                rows.append(AssetResult(name, category, method, None, seconds,
+                                        note=f"n/a: no biped fitted ({prediction.method} instead)"))
+                continue
+            note = f"chose {prediction.method}" if method == "auto" else None
+            rows.append(AssetResult(name, category, method, scores_of(case, prediction.skeleton), seconds, note=note))
+            if method == "auto" and candidate_rows:
+                rows += _candidate_rows(name, category, case, prediction)
         except Exception as exc:  # one failing method must not hide the other rows; the error is reported
-            kind = exc.code if isinstance(exc, SimcoreError) else type(exc).__name__
-            rows.append(AssetResult(name, category, method, None, time.perf_counter() - started, error=f"{kind}: {exc}"[:200]))
+            rows.append(AssetResult(name, category, method, None, time.perf_counter() - started, error=problem(exc)[:200]))
     return rows
 
 
 def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int = 64, split: str | None = None,
-                       on_asset: Callable[[str], None] | None = None) -> SkeletonEvaluation:
+                       on_asset: Callable[[str], None] | None = None,
+                       geometric_params: GeometricParams | None = None) -> SkeletonEvaluation:
     """Evaluate every rigged .glb/.gltf in `directory` with `method` ("all", "voxel", "auto", ...); with `split`,
     only the files `directory`/MANIFEST.tsv lists for that split (the corpus layout)."""
     methods = resolve_methods(method)
     report = SkeletonEvaluation()
-    for name, category, _, asset in rigged_assets(directory, report.skipped, split=split):
+    categories = read_categories(directory)
+    for path in asset_files(directory, split):
+        name = path.stem
         if on_asset is not None:
             on_asset(name)
         try:
-            tokens = _token_counts(asset, ground_truth_skeleton(asset))
-            rows = evaluate_asset(name, category, asset, methods, max_joints)
-        except Exception as exc:  # an asset whose ground truth cannot be built is listed; the others still run
+            case = load_case(path)
+            tokens = _token_counts(case)
+        except Exception as exc:  # an unreadable file or one without a skin is listed; the others still run
             report.skipped[name] = problem(exc)
             continue
         report.tokens[name] = tokens
-        report.results.extend(rows)
+        report.results.extend(evaluate_asset(name, categories.get(name, "unknown"), case, methods, max_joints,
+                                             geometric_params, candidate_rows=method == "all"))
     return report

@@ -66,6 +66,16 @@ class GeometricParams:
     loop_gap: float = 0.5  # a junction-free body whose vertices lie on rings this × its thickness apart: low-poly tube
     head_widen: float = 1.3  # a mid-plane limb widening again to this × its thinnest is a head on a neck...
     neck_tol: float = 1.1  # ...pivoting where the neck is within this × its thinnest, nearest the head
+    # Special-case rules, each switchable (simcore.skeleton.geometric_rules, `rigforge eval skeleton --ablate`).
+    restore_limbs: bool = True  # limbs that thinning erased get their medial line back (lost_limbs)
+    twin_spurs: bool = True  # mirror-twin spurs of one junction are kept or pruned together
+    hub_split: bool = True  # a hub of four or more branches is split into junctions along the spine
+    legs: bool = True  # legs standing on the floor: denser joints and a foot joint pulled in less
+    limb_roots: bool = True  # a limb gets a joint where it leaves the trunk (its hip or shoulder)
+    neck_pivot: bool = True  # a head on a neck gets its pivot where the neck is thinnest
+    mirror: bool = True  # on a mirror-symmetric mesh, twin joints are averaged into mirror images
+    lopsided: bool = True  # ...a twinless branch whose mirror image is bare solid is dropped...
+    midline_ends: bool = True  # ...and the tip joints of head and tail chains on the mirror plane are dropped
 
 
 @dataclass
@@ -83,7 +93,7 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
     keys, brs = branches(adjacency, nodes)
     rep, merged, brs = merge_junctions(keys, brs, adjacency, pos, rad, params.merge_ratio)
     split = HubSplit(rep, merged, brs, [])
-    if len(brs) >= 4:  # a hub has at least four branches
+    if params.hub_split and len(brs) >= 4:  # a hub has at least four branches
         split = split_hubs(rep, merged, brs, pos, rad, mirror_plane(pos[nodes]), len(pos))
     rep, merged, brs = split.rep, split.merged, split.branches
     if len(brs) == 1:  # a tube (no junction): like a sheet, it bends only where segments are longer than it is thick
@@ -98,11 +108,12 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
         graph.positions.append(merged[r])
         graph.body.append(body)
     for b in brs:
-        leg = leg_tip(b.nodes, adjacency, pos, rad, ground, params, scale, spacing) if len(brs) > 1 else None
+        leg = leg_tip(b.nodes, adjacency, pos, rad, ground, params, scale, spacing) if len(brs) > 1 and params.legs else None
         step = spacing if leg is None else min(spacing, path_length(pos, b.nodes) / params.leg_segments)
         interior = branch_joints(pos[b.nodes], rad[b.nodes], params.turn_ratio, params.turn_min * scale, step)
-        if len(brs) > 1:
+        if len(brs) > 1 and params.limb_roots:
             interior = with_limb_root(b.nodes, interior, adjacency, pos, rad, params, spacing)
+        if len(brs) > 1 and params.neck_pivot:
             interior = head_at_neck(b.nodes, interior, adjacency, pos, rad, ground, params, spacing)
         chain = [slot[rep[b.start]]]
         for i in interior:
@@ -276,11 +287,11 @@ def _closed_solid(v: np.ndarray, faces: np.ndarray, params: GeometricParams) -> 
     Returns (grid, medial forest, close radius used). Unsupervised: no ground truth, one criterion for all meshes.
     """
     grid = solid_voxels(v, faces, resolution=params.resolution, close_radius=params.close_radius)
-    forest = medial_forest(grid, restore_limbs=True)
+    forest = medial_forest(grid, restore_limbs=params.restore_limbs)
     if params.close_retry <= params.close_radius:
         return grid, forest, params.close_radius
     closed = solid_voxels(v, faces, resolution=params.resolution, close_radius=params.close_retry)
-    closed_forest = medial_forest(closed, restore_limbs=True)
+    closed_forest = medial_forest(closed, restore_limbs=params.restore_limbs)
     shorter = _medial_length(closed_forest) < (1.0 - params.close_drop) * _medial_length(forest)
     if shorter and grid.inside(closed_forest.positions).mean() >= params.close_inside:
         return closed, closed_forest, params.close_retry
@@ -323,7 +334,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         forest = MedialForest(base.positions, base.radius, [list(a) for a in base.adjacency], base.component)
         slender = params.twin_slender if spur_min <= params.spur_min * scale else np.inf  # the budget comes first
         removed = prune_spurs(forest.adjacency, forest.positions, forest.radius, params.spur_ratio, spur_min,
-                              plane, slender)
+                              plane if params.twin_spurs else None, slender)
         alive = np.ones(len(forest.positions), bool)
         alive[removed] = False
         graph = _JointGraph([], [], [])
@@ -359,7 +370,7 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
         depth = base.radius[int(np.argmin(np.linalg.norm(base.positions - pos[0], axis=1)))]
         pos[0] = _extend_end(pos[0], pos[np.flatnonzero(parents == 0)[0]], params.root_push * depth)
     pos = centre_in_section(pos, parents, grid, params.section_limit)
-    twins = None if plane is None else mirror_twins(pos, parents, grid, plane)
+    twins = None if plane is None or not params.mirror else mirror_twins(pos, parents, grid, plane)
     if twins is not None:
         pos = symmetrize(pos, twins)
     pos = snap_inside(grid, pos)  # a tip pulled across a bend, a joint averaged with its mirror twin
@@ -367,8 +378,9 @@ def geometric_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: i
     stubs = _stub_joints(pos, parents, STUB_VOXELS * grid.pitch)
     whole, drop = skeleton, stubs
     if twins is not None:
-        lopsided = lopsided_branches(skeleton, twins, grid)
-        ends = _midline_ends(skeleton, twins)
+        none = np.zeros(skeleton.num_joints, bool)
+        lopsided = lopsided_branches(skeleton, twins, grid) if params.lopsided else none
+        ends = _midline_ends(skeleton, twins) if params.midline_ends else none
         whole, drop, added = complete_twins(skeleton, twins, grid, lopsided | ends | stubs, max_joints)
         mirror = mirror_report(twins, int(np.count_nonzero(lopsided[1:] & ~lopsided[parents[1:]])), added,
                                int(np.count_nonzero(ends)))

@@ -2,28 +2,30 @@
 
 The model reads `points` surface samples of the mesh (in the token frame, glTF +Y up), then writes candidate
 token sequences under the grammar (never an invalid tree): one greedy sequence per class token (articulation,
-Mixamo, the game-engine humanoid) and the rest sampled. Each candidate is scored without ground truth
-(`simcore.skeleton.candidate_score`) and the best one kept, then placed in the solid (`refined`). The weights
-file is read once per process; a missing or corrupt file raises ModelUnavailable with the path and the reason.
+Mixamo, the game-engine humanoid) and the rest sampled. Each is placed in the solid (`refined`) and scored
+without ground truth (`simcore.skeleton.candidate_score`, plus the model's log-probability); the best is kept.
+`auto` takes all of them as candidates. The weights file is read once per process; a missing or corrupt file
+raises ModelUnavailable with the path and the reason.
 """
 
 from __future__ import annotations
 
+import time
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from simcore.geometry.voxelize import solid_voxels
 from simcore.model_weights import load_weights, read_metadata
-from simcore.skeleton.candidate_score import ShapeContext, score_candidate
+from simcore.skeleton.candidate_score import LOG_PROB_WEIGHT, ShapeContext, score_candidate, shape_context
+from simcore.skeleton.candidates import Candidate
 from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel
 from simcore.skeleton.section_centre import centre_in_section
-from simcore.skeleton.shape_points import shape_points, surface_points
-from simcore.skeleton.symmetry import body_mirror, mirror_twins, symmetrize
+from simcore.skeleton.shape_points import shape_points
+from simcore.skeleton.symmetry import mirror_twins, symmetrize
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
@@ -31,9 +33,8 @@ from simcore.skeleton.types import Skeleton
 WEIGHTS = Path(__file__).parent / "weights" / "skeleton_tokens.safetensors"
 GREEDY_CLASSES = ("articulation", "mixamo", "vroid")
 TEMPERATURE = 0.8
-SCORE_SAMPLES = 3000  # surface points the reach term is measured on
-SECTION_LIMIT = 6.0  # voxels of the 128 solid
-SOLID_RESOLUTION = 128  # joints outside are snapped to this solid: 64 left half of them outside a 128-voxel one
+CANDIDATES = 16  # decoded sequences per mesh: one greedy per class, the rest sampled
+SECTION_LIMIT = 6.0  # voxels of the quality score's solid: decoded joints are a few coordinate bins off
 
 
 @lru_cache(maxsize=4)
@@ -75,16 +76,16 @@ def refined(skeleton: Skeleton, shape: ShapeContext) -> tuple[Skeleton, dict[str
     return merged, counts
 
 
-def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = 16, seed: int = 0,
-                     model_path: Path | None = None) -> tuple[Skeleton, dict]:
-    """The best of `candidates` decoded skeletons for a mesh (vertices (V, 3) metres, +Y up; faces (F, 3)), in the
-    mesh's frame, and a report: each candidate's class and scores, the chosen one, joints moved inside and merged.
+def learned_candidates(vertices: np.ndarray, faces: np.ndarray, shape: ShapeContext, *, max_joints: int = 64,
+                       candidates: int = CANDIDATES, seed: int = 0, model_path: Path | None = None) -> list[Candidate]:
+    """`candidates` decoded skeletons for a mesh (vertices (V, 3) metres, +Y up; faces (F, 3)), each placed in the
+    solid (`refined`), in the mesh's frame, with its class, joints moved and merged, and the model's log-probability.
     model_path: the weights file (None = the shipped WEIGHTS)."""
+    started = time.perf_counter()
     model_path = WEIGHTS if model_path is None else model_path
     model = load_skeleton_model(model_path)
     points = int(read_metadata(model_path, "skeleton", "skeleton")["summary"]["config"]["points"])
-    rng = np.random.default_rng(seed)
-    cloud, norm = shape_points(vertices, faces, points, rng)
+    cloud, norm = shape_points(vertices, faces, points, np.random.default_rng(seed))
     grammar = SkeletonGrammar(max_length=model.config.max_tokens, max_joints=max_joints)
     classes = list(GREEDY_CLASSES[:candidates])
     sampled = [GREEDY_CLASSES[k % len(GREEDY_CLASSES)] for k in range(max(0, candidates - len(classes)))]
@@ -93,17 +94,40 @@ def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int
     decoded = decode_tokens(model, tensor, classes, grammar)
     if sampled:
         decoded += decode_tokens(model, tensor, sampled, grammar, temperature=TEMPERATURE, generator=generator)
-    size = float(np.ptp(vertices, axis=0).max())
-    shape = ShapeContext(solid_voxels(vertices, faces, resolution=SOLID_RESOLUTION),
-                         surface_points(vertices, faces, SCORE_SAMPLES, rng)[0], body_mirror(vertices), size)
     tokenizer = SkeletonTokenizer(max_length=model.config.max_tokens)
-    skeletons = [tokenizer.decode(tokens, norm) for tokens, _ in decoded]
-    scores = [score_candidate(s, shape, log_prob) for s, (_, log_prob) in zip(skeletons, decoded)]
-    best = int(np.argmax([s.total for s in scores]))
-    chosen, counts = refined(skeletons[best], shape)
+    out = []
+    for k, (cls, (tokens, log_prob)) in enumerate(zip(classes + sampled, decoded)):
+        skeleton, counts = refined(tokenizer.decode(tokens, norm), shape)
+        out.append(Candidate(skeleton, "learned", {"sample": k, "class": cls, "greedy": k < len(classes), **counts},
+                             log_prob=log_prob))
+    seconds = (time.perf_counter() - started) / max(len(out), 1)
+    for c in out:
+        c.seconds = seconds
+    return out
+
+
+def best_of_n(pool: list[Candidate], totals: list[float]) -> int:
+    """Index of the learned candidate with the highest quality score `totals` plus LOG_PROB_WEIGHT × its
+    log-probability (the model's own confidence breaks near ties); candidates of other methods are passed over."""
+    ranking = [t + LOG_PROB_WEIGHT * c.log_prob if c.log_prob is not None else -np.inf for c, t in zip(pool, totals)]
+    if not np.isfinite(max(ranking, default=-np.inf)):
+        raise ValueError("no learned candidate to choose from")
+    return int(np.argmax(ranking))
+
+
+def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = CANDIDATES,
+                     seed: int = 0, model_path: Path | None = None) -> tuple[Skeleton, dict]:
+    """The best of `candidates` decoded skeletons (`learned_candidates`) by the quality score plus the model's own
+    log-probability, and a report: each candidate's class and scores, the chosen one."""
+    shape = shape_context(vertices, faces, seed)
+    pool = learned_candidates(vertices, faces, shape, max_joints=max_joints, candidates=candidates, seed=seed,
+                              model_path=model_path)
+    scores = [score_candidate(c.skeleton, shape) for c in pool]
+    best = best_of_n(pool, [s.total for s in scores])
+    chosen = pool[best]
     report = {
-        "chosen": best, "joints": chosen.num_joints, **counts, "symmetric": shape.mirror is not None,
-        "candidates": [{"class": c, "joints": s.num_joints, **sc.to_dict()}
-                       for c, s, sc in zip(classes + sampled, skeletons, scores)],
+        "chosen": best, "joints": chosen.skeleton.num_joints, "symmetric": shape.mirror is not None,
+        "candidates": [{**c.report, "joints": c.skeleton.num_joints, "log_prob": round(c.log_prob or 0.0, 4),
+                        **s.to_dict()} for c, s in zip(pool, scores)],
     }
-    return chosen, report
+    return chosen.skeleton, report

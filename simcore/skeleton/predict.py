@@ -1,4 +1,4 @@
-"""One entry point for skeleton prediction: geometric, humanoid template, learned, or automatic choice."""
+"""One entry point for skeleton prediction: geometric, humanoid template, learned, or `auto` (the best candidate)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,11 @@ from simcore.errors import InvalidInput
 from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.geometry.referenced import referenced_mesh
 from simcore.skeleton.axes import GLTF_UP, axis
-from simcore.skeleton.geometric import geometric_skeleton
-from simcore.skeleton.props import parts_to_try_without
+from simcore.skeleton.candidate_score import shape_context
+from simcore.skeleton.candidates import Candidate, geometric_candidate, humanoid_candidate
+from simcore.skeleton.geometric import GeometricParams
+from simcore.skeleton.geometric_rules import plain_params
+from simcore.skeleton.select import select_candidate
 from simcore.skeleton.types import Skeleton
 
 Method = Literal["auto", "geometric", "humanoid", "learned"]
@@ -22,11 +25,13 @@ METHODS: tuple[str, ...] = ("auto", "geometric", "humanoid", "learned")
 
 @dataclass
 class SkeletonPrediction:
-    """A predicted skeleton (in the input vertices' frame), the method that made it, and a JSON-ready report."""
+    """A predicted skeleton (in the input vertices' frame), the method that made it, a JSON-ready report, and
+    (for `auto`) every candidate it chose among."""
 
     skeleton: Skeleton
     method: str
     report: dict[str, Any] = field(default_factory=dict)
+    candidates: list[Candidate] = field(default_factory=list)
 
 
 def _check_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -45,20 +50,51 @@ def _check_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np
     return mesh.vertices, mesh.faces
 
 
+def _auto(v: np.ndarray, f: np.ndarray, parts: list[SurfacePart], up: np.ndarray, report: dict[str, Any], *,
+          max_joints: int, up_axis: str | None, forward_axis: str | None, params: GeometricParams) -> SkeletonPrediction:
+    """Every method's candidates, the one with the best quality score chosen (simcore.skeleton.select)."""
+    from simcore.model_weights import ModelUnavailable
+    from simcore.skeleton.learned import learned_candidates
+
+    started = time.perf_counter()
+    shape = shape_context(v, f)
+    timings = {"shape": round(time.perf_counter() - started, 3)}
+    humanoid, report["humanoid"] = humanoid_candidate(v, f, parts, max_joints=max_joints, up_axis=up_axis,
+                                                      forward_axis=forward_axis, force=False)  # a confident biped only
+    pool = [] if humanoid is None else [humanoid]
+    pool.append(geometric_candidate(v, f, parts, max_joints=max_joints, up=up, params=params))
+    pool.append(geometric_candidate(v, f, parts, max_joints=max_joints, up=up, params=plain_params(params), method="thinning"))
+    try:
+        pool += learned_candidates(v, f, shape, max_joints=max_joints)
+    except ModelUnavailable as exc:  # the other methods still give a skeleton; the report says why learned is missing
+        report["learned_unavailable"] = str(exc)
+    for c in pool:
+        timings[c.method] = round(timings.get(c.method, 0.0) + c.seconds, 3)
+    selection = select_candidate(pool, shape)
+    report["geometric"] = next(c.report for c in pool if c.method == "geometric")
+    report["auto"] = selection.report(pool)
+    report["timings_s"] = timings
+    return SkeletonPrediction(selection.chosen.skeleton, selection.chosen.method, report, pool)
+
+
 def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "auto", max_joints: int = 64,
-                     up_axis: str | None = None, forward_axis: str | None = None) -> SkeletonPrediction:
+                     up_axis: str | None = None, forward_axis: str | None = None,
+                     geometric_params: GeometricParams | None = None) -> SkeletonPrediction:
     """Predict a skeleton for a triangle mesh.
 
     vertices: (V, 3) float64 positions (metres; any frame, the skeleton comes back in the same frame).
     faces:    (F, 3) int64 triangles.
     method:   "geometric" (medial skeleton, any shape), "humanoid" (Mixamo template; falls back to geometric
-              when no biped is found, saying so in the report) or "auto" (humanoid when an upright biped is
-              detected with confidence, else geometric; never learned) or "learned" (the skeleton-token model,
-              simcore.skeleton.learned; ModelUnavailable when its weights cannot be read). A failed humanoid fit is retried without separate
-              parts that may hide the biped (simcore.skeleton.props); the report counts what was left out.
+              when no biped is found, saying so in the report), "learned" (the skeleton-token model,
+              simcore.skeleton.learned; ModelUnavailable when its weights cannot be read) or "auto" (every
+              method's candidates, the best by the quality score of simcore.skeleton.candidate_score; the report's
+              "auto" says which won and why). A failed humanoid fit is retried without separate parts that may
+              hide the biped (simcore.skeleton.props); the report counts what was left out.
     up_axis / forward_axis: "x", "-x", "y", … overrides for the humanoid fit; None = detect. The geometric method
               uses up_axis (default glTF's +Y) only to tell legs standing on the floor.
-    Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric" / "learned".
+    geometric_params: the geometric method's tuning (None = the defaults; the ablation changes it).
+    Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric" / "learned"
+    / "auto".
     """
     if method not in METHODS:
         raise InvalidInput(f"unknown skeleton method {method!r}; expected one of {', '.join(METHODS)}",
@@ -67,8 +103,8 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
         raise InvalidInput("max_joints must be at least 2", code="invalid_option", field="options.max_joints")
     up = axis(up_axis, "up_axis")  # both checked before any work, whichever method runs
     axis(forward_axis, "forward_axis")
+    params = GeometricParams() if geometric_params is None else geometric_params
     v, f = _check_mesh(vertices, faces)
-    timings: dict[str, float] = {}
     report: dict[str, Any] = {"requested": method}
     if method == "learned":  # reads the mesh as glTF's +Y up, the frame it was trained in
         from simcore.skeleton.learned import learned_skeleton
@@ -77,35 +113,20 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
         skeleton, report["learned"] = learned_skeleton(v, f, max_joints=max_joints)
         report["timings_s"] = {"learned": round(time.perf_counter() - started, 3)}
         return SkeletonPrediction(skeleton, "learned", report)
-    parts: list[SurfacePart] | None = None  # connected parts, found once for the retries and the geometric method
-    if method in ("auto", "humanoid"):
-        from simcore.skeleton.humanoid import fit_humanoid
-
-        started = time.perf_counter()
-        fit = fit_humanoid(v, f, max_joints=max_joints, up_axis=up_axis, forward_axis=forward_axis,
-                           force=method == "humanoid")
-        if fit.skeleton is None:
-            parts = surface_parts(v, f)
-        tries = parts_to_try_without(parts, len(f)) if parts is not None else []  # a sword held up, a skirt
-        if not fit.biped_layout:  # no biped layout at all (a quadruped): one try, without all of them
-            tries = tries[-1:]
-        for prop in tries:
-            rest = referenced_mesh(v, f[~prop])
-            retry = fit_humanoid(rest.vertices, rest.faces, max_joints=max_joints, up_axis=up_axis,
-                                 forward_axis=forward_axis, force=method == "humanoid")
-            if retry.skeleton is not None:
-                fit = retry
-                fit.report["prop_triangles_left_out"] = int(prop.sum())
-                break
-        timings["humanoid"] = round(time.perf_counter() - started, 3)
-        report["humanoid"] = fit.report
-        if fit.skeleton is not None:
-            report["timings_s"] = timings
-            return SkeletonPrediction(fit.skeleton, "humanoid", report)
-    started = time.perf_counter()
-    skeleton, geo_report = geometric_skeleton(v, f, max_joints=max_joints, parts=parts,
-                                              up=GLTF_UP if up is None else up)
-    timings["geometric"] = round(time.perf_counter() - started, 3)
-    report["geometric"] = geo_report
+    parts = surface_parts(v, f)
+    up_vector = GLTF_UP if up is None else up
+    if method == "auto":
+        return _auto(v, f, parts, up_vector, report, max_joints=max_joints, up_axis=up_axis, forward_axis=forward_axis,
+                     params=params)
+    timings: dict[str, float] = {}
+    if method == "humanoid":
+        humanoid, report["humanoid"] = humanoid_candidate(v, f, parts, max_joints=max_joints, up_axis=up_axis,
+                                                          forward_axis=forward_axis, force=True)
+        if humanoid is not None:
+            report["timings_s"] = {"humanoid": round(humanoid.seconds, 3)}
+            return SkeletonPrediction(humanoid.skeleton, "humanoid", report)
+    geometric = geometric_candidate(v, f, parts, max_joints=max_joints, up=up_vector, params=params)
+    timings["geometric"] = round(geometric.seconds, 3)
+    report["geometric"] = geometric.report
     report["timings_s"] = timings
-    return SkeletonPrediction(skeleton, "geometric", report)
+    return SkeletonPrediction(geometric.skeleton, "geometric", report)

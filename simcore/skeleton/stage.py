@@ -1,6 +1,6 @@
 """Pipeline stage `skeleton`: predict (or keep) the skeleton and write skeleton.json.
 
-Options used: `skeleton` (auto | geometric | humanoid | keep), `max_joints`, `up_axis`, `forward_axis`.
+Options used: `skeleton` (auto | geometric | humanoid | learned | keep), `max_joints`, `up_axis`, `forward_axis`.
 `keep` reuses the upload's own skin (state.mesh.source_rig, already in the mesh frame), or the skeleton file
 given next to the mesh (inputs.skeleton_path, an edited skeleton.json: simcore.skeleton.skeleton_file). A ground plane
 under the model (simcore.geometry.ground) is left out and recorded in state.ground_faces. The ingested mesh
@@ -22,15 +22,18 @@ import numpy as np
 from simcore.arrays import unique_ints
 from simcore.errors import InvalidInput, SimcoreError
 from simcore.geometry.ground import ground_faces
-from simcore.geometry.parts import surface_parts
+from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.skeleton.coverage import unreached_parts
-from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.predict import SkeletonPrediction, predict_skeleton
 from simcore.skeleton.types import Skeleton
 
 if TYPE_CHECKING:
     from pathlib import Path
 
+    from simcore.geometry.mesh import IngestedMesh
+    from simcore.options import JobOptions
     from simcore.pipeline import PipelineState, StageProgress
+    from simcore.skeleton.geometric import GeometricParams
 
 
 def _tokens(skeleton: Skeleton, vertices: np.ndarray) -> tuple[dict[str, Any] | None, str | None]:
@@ -62,6 +65,23 @@ def _given_skeleton(state: PipelineState, path: Path, vertices: np.ndarray) -> S
     return read_skeleton_file(path.read_bytes(), vertices)
 
 
+def predict_for_job(mesh: IngestedMesh, options: JobOptions, ground: np.ndarray,
+                    geometric_params: GeometricParams | None = None) -> SkeletonPrediction:
+    """The skeleton a job predicts for an ingested mesh with `options` (skeleton method, max_joints, axes), the
+    ground-plane triangles `ground` (F,) bool left out. `rigforge eval skeleton` calls this too, so its figures are
+    what a job gives. geometric_params: the geometric method's tuning (None = the defaults; the ablation changes it)."""
+    return predict_skeleton(
+        mesh.vertices, mesh.faces[~ground], method=options.skeleton, max_joints=options.max_joints,
+        up_axis="y" if options.up_axis else None, forward_axis=options.forward_axis, geometric_params=geometric_params,
+    )
+
+
+def mesh_ground(mesh: IngestedMesh) -> tuple[list[SurfacePart], np.ndarray]:
+    """The mesh's connected parts and its ground-plane triangles (F,) bool (simcore.geometry.ground)."""
+    parts = surface_parts(mesh.vertices, mesh.faces)
+    return parts, ground_faces(parts, len(mesh.faces))
+
+
 def run(state: PipelineState, progress: StageProgress) -> None:
     """Set state.skeleton, write skeleton.json, record report["skeleton"]."""
     options = state.options
@@ -71,8 +91,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     progress.check_cancel()
     progress(0.05)
     started = time.perf_counter()
-    parts = surface_parts(mesh.vertices, mesh.faces)
-    ground = ground_faces(parts, len(mesh.faces))
+    parts, ground = mesh_ground(mesh)
     report: dict[str, Any]
     if state.inputs.skeleton_path is not None:
         skeleton, method, report = _given_skeleton(state, state.inputs.skeleton_path, mesh.vertices), "given", {}
@@ -83,10 +102,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         skeleton = mesh.source_rig.skeleton.validate()
         method, report = "keep", {}
     else:
-        prediction = predict_skeleton(
-            mesh.vertices, mesh.faces[~ground], method=options.skeleton, max_joints=options.max_joints,
-            up_axis="y" if options.up_axis else None, forward_axis=options.forward_axis,
-        )
+        prediction = predict_for_job(mesh, options, ground)
         skeleton, method, report = prediction.skeleton, prediction.method, prediction.report
         if options.skeleton == "humanoid" and method != "humanoid":
             state.warn("no humanoid was found with confidence; used the geometric skeleton instead")

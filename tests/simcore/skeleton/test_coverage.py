@@ -23,7 +23,7 @@ def test_a_second_figure_beside_the_first_is_unreached() -> None:
     v, f, _ = stick_humanoid()
     second = trimesh.Trimesh(v + [2.5, 0.0, 0.0], f, process=False)
     vertices, faces, first_faces = _with(second)
-    skeleton = predict_skeleton(vertices, faces).skeleton
+    skeleton = predict_skeleton(vertices, faces, method="humanoid").skeleton
     far = unreached_parts(vertices, faces, surface_parts(vertices, faces), skeleton)
     rigged_second = skeleton.positions[:, 0].mean() > 1.25  # the fit takes one of the two
     assert far and all((p.faces.min() >= first_faces) != rigged_second for p in far)  # the other figure's parts
@@ -31,7 +31,7 @@ def test_a_second_figure_beside_the_first_is_unreached() -> None:
 
 def test_a_held_prop_is_reached() -> None:
     vertices, faces, _ = _with(capsule_between(np.array([-0.72, 1.32, 0.05]), np.array([-0.72, 2.32, 0.05]), 0.02))
-    skeleton = predict_skeleton(vertices, faces).skeleton
+    skeleton = predict_skeleton(vertices, faces, method="humanoid").skeleton
     assert unreached_parts(vertices, faces, surface_parts(vertices, faces), skeleton) == []
 
 
@@ -42,5 +42,5 @@ def test_a_blob_around_its_one_joint_and_a_big_flat_part_near_a_bone_are_reached
     # A 10 m wall whose corners are far from the figure's bones, but whose surface passes by its feet.
     wall = trimesh.Trimesh([[-5, 0, -0.3], [5, 0, -0.3], [5, 10, -0.3], [-5, 10, -0.3]], [[0, 1, 2], [0, 2, 3]], process=False)
     vertices, faces, _ = _with(wall)
-    skeleton = predict_skeleton(vertices, faces).skeleton
+    skeleton = predict_skeleton(vertices, faces, method="humanoid").skeleton
     assert unreached_parts(vertices, faces, surface_parts(vertices, faces), skeleton) == []

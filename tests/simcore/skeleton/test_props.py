@@ -8,7 +8,7 @@ import trimesh
 
 from simcore.geometry.capsule_creatures import capsule_between, stick_humanoid
 from simcore.geometry.parts import surface_parts
-from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.candidates import humanoid_candidate
 from simcore.skeleton.props import parts_to_try_without
 from simcore.skinning.predict import compute_weights
 from tests.meshes import joined
@@ -34,10 +34,11 @@ def test_the_sword_is_the_part_that_sticks_out(swordsman) -> None:
 
 def test_a_humanoid_holding_a_sword_up_is_fitted_without_it(swordsman) -> None:
     vertices, faces, first = swordsman
-    prediction = predict_skeleton(vertices, faces, method="auto")
-    assert prediction.method == "humanoid"  # the sword's tip read as the head before: geometric
-    assert prediction.report["humanoid"]["prop_triangles_left_out"] > 0
-    skeleton = prediction.skeleton
+    candidate, report = humanoid_candidate(vertices, faces, surface_parts(vertices, faces), max_joints=64, up_axis=None,
+                                           forward_axis=None, force=False)  # auto's humanoid candidate
+    assert candidate is not None, report  # the sword's tip read as the head before
+    assert report["prop_triangles_left_out"] > 0
+    skeleton = candidate.skeleton
     assert skeleton.positions[:, 1].max() < 1.8  # no joint up the sword (its tip is at 2.3 m)
     weights = compute_weights(vertices, faces, skeleton, method="geodesic").weights.toarray()
     right_arm = [k for k, n in enumerate(skeleton.names) if n.startswith("mixamorig:Right") and ("Hand" in n or "Fore" in n)]
@@ -52,9 +53,11 @@ def test_a_humanoid_in_a_skirt_is_fitted_without_it() -> None:
     side = ~(np.abs(skirt.vertices[skirt.faces][:, :, 1] - 0.12) < 1e-6).all(axis=1)  # open at the hem
     both = joined([trimesh.Trimesh(vertices, faces, process=False),
                                      trimesh.Trimesh(skirt.vertices, skirt.faces[side], process=False)])
-    prediction = predict_skeleton(both.vertices, both.faces, method="auto")
-    assert prediction.method == "humanoid"  # the skirt's shell gave 48 geometric joints before
-    assert prediction.report["humanoid"]["prop_triangles_left_out"] == int(side.sum())
+    vertices, faces = np.asarray(both.vertices), np.asarray(both.faces)
+    candidate, report = humanoid_candidate(vertices, faces, surface_parts(vertices, faces), max_joints=64, up_axis=None,
+                                           forward_axis=None, force=False)
+    assert candidate is not None, report  # the skirt's shell hid the biped before
+    assert report["prop_triangles_left_out"] == int(side.sum())
 
 
 def test_a_part_inside_the_silhouette_is_not_tried_away() -> None:

@@ -1,0 +1,78 @@
+"""`auto` as a selection: the quality score, the chosen candidate and its reason, the geometric rule switches."""
+
+from __future__ import annotations
+
+from dataclasses import fields
+
+import numpy as np
+import pytest
+
+from simcore.geometry.capsule_creatures import quadruped
+from simcore.skeleton import learned
+from simcore.skeleton.candidate_score import score_candidate, shape_context
+from simcore.skeleton.candidates import Candidate
+from simcore.skeleton.geometric import GeometricParams
+from simcore.skeleton.geometric_rules import RULES, plain_params, without_rule
+from simcore.skeleton.predict import predict_skeleton
+from simcore.skeleton.select import select_candidate
+from simcore.skeleton.types import JointKind, Skeleton
+
+
+@pytest.fixture(scope="module")
+def dog():
+    vertices, faces, truth = quadruped()
+    return vertices, faces, truth, shape_context(vertices, faces)
+
+
+def _stick(truth: Skeleton) -> Skeleton:
+    """A two-joint skeleton along the dog's trunk only: no legs, head or tail."""
+    ends = truth.positions[[truth.names.index("pelvis"), truth.names.index("chest")]]
+    return Skeleton(ends, np.array([-1, 0]), ["a", "b"], [JointKind.FREE] * 2)
+
+
+def test_the_true_skeleton_outscores_a_trunk_stick_and_is_chosen_with_its_reason(dog):
+    _, _, truth, shape = dog
+    good, bad = score_candidate(truth, shape), score_candidate(_stick(truth), shape)
+    assert good.total > bad.total
+    assert good.reach < bad.reach and good.medial_gap < bad.medial_gap  # the legs' tips are far from a trunk stick
+    selection = select_candidate([Candidate(_stick(truth), "stick"), Candidate(truth, "truth")], shape)
+    assert selection.chosen.method == "truth"
+    assert selection.reason.startswith("truth scored") and "ahead of stick" in selection.reason
+    report = selection.report([Candidate(_stick(truth), "stick"), Candidate(truth, "truth")])
+    assert report["chosen"] == "truth" and [c["method"] for c in report["candidates"]] == ["stick", "truth"]
+
+
+def test_a_skeleton_with_joints_outside_and_stacked_scores_lower(dog):
+    _, _, truth, shape = dog
+    outside = Skeleton(truth.positions + np.array([0.0, 2.0, 0.0]), truth.parents, truth.names, truth.kinds)
+    stacked = Skeleton(np.repeat(truth.positions[:1], truth.num_joints, axis=0), truth.parents, truth.names, truth.kinds)
+    base = score_candidate(truth, shape)
+    assert score_candidate(outside, shape).inside == 0.0 < base.inside
+    assert score_candidate(stacked, shape).stacked == 1.0 > base.stacked
+    assert max(score_candidate(outside, shape).total, score_candidate(stacked, shape).total) < base.total
+
+
+def test_auto_reports_every_candidate_and_why_one_won(dog, monkeypatch, tmp_path):
+    vertices, faces, _, _ = dog
+    monkeypatch.setattr(learned, "WEIGHTS", tmp_path / "missing.safetensors")  # auto goes on without the model
+    prediction = predict_skeleton(vertices, faces, method="auto")
+    auto = prediction.report["auto"]
+    assert prediction.method == auto["chosen"] and auto["chosen"] in auto["reason"]
+    assert [c["method"] for c in auto["candidates"]][-2:] == ["geometric", "thinning"]
+    assert "missing.safetensors" in prediction.report["learned_unavailable"]
+    chosen = max(auto["candidates"], key=lambda c: c["total"])
+    assert chosen["method"] == prediction.method and chosen["joints"] == prediction.skeleton.num_joints
+    again = predict_skeleton(vertices, faces, method="auto")
+    np.testing.assert_array_equal(again.skeleton.positions, prediction.skeleton.positions)
+
+
+def test_each_rule_switch_changes_only_its_own_parameters():
+    default = GeometricParams()
+    plain = plain_params()
+    for name, (_, overrides) in RULES.items():
+        off = without_rule(name)
+        changed = {f.name for f in fields(GeometricParams) if getattr(off, f.name) != getattr(default, f.name)}
+        assert changed == set(overrides), name
+        assert all(getattr(plain, key) == value for key, value in overrides.items())
+    with pytest.raises(KeyError, match="unknown geometric rule"):
+        without_rule("magic")
