@@ -19,6 +19,7 @@ from api.problem_schema import ProblemDetails
 from simcore.options import JobOptions
 
 REF_TEMPLATE = "#/components/schemas/{model}"
+BINARY = {"schema": {"type": "string", "format": "binary"}}  # a response body that is a file
 # Models that only `responses` entries and JSON form parts refer to, so FastAPI does not collect them itself.
 COMPONENT_MODELS: tuple[type[BaseModel], ...] = (ProblemDetails, JobOptions)
 

@@ -22,7 +22,7 @@ from api.jobs.artifact_responses import artifact_response, find_artifact, zip_re
 from api.jobs.schemas import JobOut, JobPage, JobStatus
 from api.jobs.uploads import store_skeleton, store_upload
 from api.models import Job
-from api.openapi import json_part, json_part_encoding
+from api.openapi import BINARY, json_part, json_part_encoding
 from api.problem_schema import problem_responses
 from api.queue import enqueue_job
 from api.quotas import check_submit
@@ -39,7 +39,6 @@ SSE_POLL_SECONDS = 0.3
 # signed download URLs change with their expiry, not with the job: the ETag leaves them out
 VOLATILE = {"artifacts": {"__all__": {"download_url"}}, "download_all_url": True}
 MAX_OPTIONS_DEPTH = 8  # JobOptions nests 3 deep (refine.bone_stiffness)
-BINARY = {"schema": {"type": "string", "format": "binary"}}
 OPTIONS_EXAMPLE = {"skeleton": "auto", "skinning": "auto", "motion": {"in_place": True}, "fbx": True}
 
 
