@@ -218,6 +218,7 @@ def main() -> None:
     parser.add_argument("--upload-mb", type=float, default=5.0, help="size of each uploaded GLB")
     args = parser.parse_args()
     upload = grid_glb(args.upload_mb)
+    load_before = os.getloadavg()
     rows = []
     for name in args.backends.split(","):
         if name == "embedded":
@@ -237,9 +238,12 @@ def main() -> None:
         uploads = f"{args.uploads} concurrent {u['size_mb']} MB uploads"
         print(f"{r['backend']:<26} {uploads:<34} {u['mb_per_s']:>7} MB/s {u['p50_s']:>7} s "
               f"{u['p99_s']:>7} s  wall {u['wall_s']} s, {u['accepted']} accepted, {u['retries']} retries after 503/429")
+    load = [round(x, 1) for x in (*load_before[:1], os.getloadavg()[0])]
+    print(f"1-minute load average before / after: {load[0]} / {load[1]} on {os.cpu_count()} CPUs (other work on the machine "
+          "competes with the server and its worker)")
     out = REPO / "bench" / "results" / "load.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"machine": {"cpus": os.cpu_count(), "platform": platform.platform()}, "args": vars(args),
+    out.write_text(json.dumps({"machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "load_average": load}, "args": vars(args),
                                "results": rows}, indent=2))
     print(f"wrote {out.relative_to(REPO)}")
 
