@@ -154,10 +154,11 @@ def get_job(request: Request, job: OwnedJob,
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job",
              responses=problem_responses(404, 409, 422))
-def cancel_job(request: Request, job: OwnedJob) -> JobOut:
+def cancel_job(request: Request, response: Response, job: OwnedJob) -> JobOut:
     with session_scope() as session:
         if not state.cancel(session, job.id):
             raise Problem(409, "job_finished", f"job is already {job.status}")
+        response.headers["Location"] = f"{router.prefix}/{job.id}"
         return service.to_schema(session.get_one(Job, job.id), base_url(request))
 
 

@@ -61,7 +61,7 @@ def test_the_etag_changes_with_the_job(client, auth, monkeypatch):
     monkeypatch.setattr("worker.celery_app.enqueue", lambda job_id: None)
     location = submit(client, auth).headers["location"]
     etag = client.get(location, headers=auth).headers["etag"]
-    client.post(f"{location}/cancel", headers=auth)
+    assert client.post(f"{location}/cancel", headers=auth).headers["location"] == location
     changed = client.get(location, headers={**auth, "If-None-Match": etag})
     assert changed.status_code == 200 and changed.json()["status"] == "canceled" and changed.headers["etag"] != etag
 
