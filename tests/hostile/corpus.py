@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from tests.hostile.bomb_cases import bomb_cases
 from tests.hostile.case import Case
 from tests.hostile.gltf_cases import gltf_cases
 from tests.hostile.request_cases import request_cases
@@ -18,7 +19,7 @@ from tests.hostile.text_cases import text_cases
 
 def all_cases() -> list[Case]:
     """Every case, names unique."""
-    cases = [*gltf_cases(), *text_cases(), *request_cases()]
+    cases = [*gltf_cases(), *text_cases(), *request_cases(), *bomb_cases()]
     names = [c.name for c in cases]
     assert len(names) == len(set(names)), "duplicate case names"
     return cases
