@@ -10,10 +10,12 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any
 
+from pythonjsonlogger.core import RESERVED_ATTRS
+
 from api.settings import Settings
 
 _job_id: ContextVar[str | None] = ContextVar("job_id", default=None)
-TEXT = "%(asctime)s %(levelname)s %(name)s: %(job_tag)s%(message)s"
+TEXT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
 JSON_FIELDS = "%(asctime)s %(levelname)s %(name)s %(message)s %(job_id)s %(process)d"
 
 
@@ -23,8 +25,16 @@ class JobIdFilter(logging.Filter):
     def filter(self, record: logging.LogRecord) -> bool:
         if getattr(record, "job_id", None) is None:
             record.job_id = _job_id.get()
-        record.job_tag = f"[job {record.job_id}] " if record.job_id else ""
         return True
+
+
+class TextFormatter(logging.Formatter):
+    """Human-readable lines; records about a job start with `[job <id>]`."""
+
+    def formatMessage(self, record: logging.LogRecord) -> str:  # noqa: N802 - logging's naming
+        line = super().formatMessage(record)
+        job_id = getattr(record, "job_id", None)
+        return line.replace(f"{record.name}: ", f"{record.name}: [job {job_id}] ", 1) if job_id else line
 
 
 @contextmanager
@@ -40,7 +50,8 @@ def job_context(job_id: object) -> Iterator[None]:
 def log_config(settings: Settings, level: str = "INFO") -> dict[str, Any]:
     """A logging.config.dictConfig for the root, uvicorn and celery loggers in the configured format."""
     formatter: dict[str, Any] = ({"()": "pythonjsonlogger.json.JsonFormatter", "fmt": JSON_FIELDS, "rename_fields": {
-        "asctime": "time", "levelname": "level", "name": "logger"}} if settings.log_format == "json" else {"format": TEXT})
+        "asctime": "time", "levelname": "level", "name": "logger"}, "reserved_attrs": [*RESERVED_ATTRS, "color_message"]}
+        if settings.log_format == "json" else {"()": TextFormatter, "fmt": TEXT})
     handler = {"class": "logging.StreamHandler", "formatter": "main", "filters": ["job_id"], "stream": "ext://sys.stderr"}
     return {
         "version": 1,
