@@ -52,7 +52,7 @@ def wait_for(predicate, timeout: float, interval: float = 0.2):  # noqa: ANN001,
     raise AssertionError(f"condition not met within {timeout} s")
 
 
-def submit_jobs(count: int) -> list[uuid.UUID]:
+def submit_jobs(count: int, stages: list | None = None) -> list[uuid.UUID]:
     from api.db import session_scope
     from api.jobs.service import create_job
     from api.keys.service import create_key
@@ -71,7 +71,7 @@ def submit_jobs(count: int) -> list[uuid.UUID]:
             stored = storage.keep(staged)
         with session_scope() as session:
             job, _ = create_job(session, owner_id=owner, mesh=(stored, "t.obj", "obj"), motion=None,
-                                options=JobOptions(stages=[]), idempotency_key=None)
+                                options=JobOptions(stages=stages or []), idempotency_key=None)
             ids.append(job.id)
         enqueue_job(ids[-1])
     return ids
