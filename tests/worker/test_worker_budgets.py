@@ -29,7 +29,8 @@ def test_the_pool_process_is_capped_and_a_job_over_the_cap_fails_with_too_large_
         worker = EmbeddedWorker(get_settings(), [sys.executable, "-m", "cli.main", "worker", "--loglevel", "WARNING"])
         worker.start()
         try:
-            pool = wait_for(lambda: children(worker.proc.pid) if worker.proc else None, 120)
+            leader = wait_for(lambda: worker.proc, 60)
+            pool = wait_for(lambda: children(leader.pid), 120)
             wait_for(lambda: data_limit(pool[0]) is not None, 30)
             assert data_limit(pool[0]) == CAP_MB * 2**20
             heavy = submit_jobs(1, stages=["skeleton"])
@@ -38,6 +39,6 @@ def test_the_pool_process_is_capped_and_a_job_over_the_cap_fails_with_too_large_
             assert (rows[0].status, rows[0].error_code) == ("failed", "too_large"), rows[0].error_message
             assert "RIGFORGE_BUDGETS__WORKER_MEMORY_MB" in rows[0].error_message
             assert rows[1].status == "succeeded"
-            assert children(worker.proc.pid) == pool  # the same pool process ran both
+            assert children(leader.pid) == pool  # the same pool process ran both
         finally:
             worker.stop(grace=5)
