@@ -3,7 +3,8 @@
 For each rigged dev asset carrying clips (loader stress tests excluded): its artist rig plays its first clip
 (the first `--seconds`), refined with the default options (30 fps simulation, CFL substeps, limited drivers,
 tether); xbot also plays mocap_cmu_01_01.bvh retargeted onto its skeleton at the BVH's own rate. Per row:
-time estimate vs measured time, substeps, the largest per-key volume change (refined, LBS, and what
+time estimate vs measured wall time and CPU time (all threads; the machine is shared, so wall time depends
+on the load, recorded with each row), substeps, the largest per-key volume change (refined, LBS, and what
 refinement adds beyond LBS), the largest offset from LBS in character heights, clamp counts, the size of
 the refined points (float32, at the clip's rate and at the simulation rate), and the quality gate's verdict
 on the refine stage (the same checks a job runs). Writes bench/results/refine_assets.json and prints a table.
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -59,9 +61,9 @@ def run_case(name: str, clip: str, vertices: np.ndarray, faces: np.ndarray, skel
     from simcore.options import RefineOptions
 
     opts = RefineOptions(enabled=True)
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     result = refine_character(vertices, faces, skeleton, weights, animation, opts)
-    total = time.perf_counter() - started
+    total, cpu = time.perf_counter() - started, time.process_time() - cpu
     r = result.report
     passes, codes = _gate(vertices, faces, skeleton, weights, animation, result, opts, workdir)
     mb = 12 * len(vertices) / 2**20
@@ -70,7 +72,8 @@ def run_case(name: str, clip: str, vertices: np.ndarray, faces: np.ndarray, skel
         "clip_frames": animation.num_frames, "clip_fps": round(float(animation.fps), 3),
         "seconds_of_clip": round((animation.num_frames - 1) / animation.fps, 3), "keys": r["frames"],
         "substeps": r["substeps_run"], "estimate_s": r["estimate_estimate_s"], "simulation_s": r["simulation_s"],
-        "total_s": round(total, 2), "ms_per_substep": r["ms_per_substep"],
+        "total_s": round(total, 2), "cpu_s": round(cpu, 2), "load_average": round(os.getloadavg()[0], 1),
+        "ms_per_substep": r["ms_per_substep"],
         "max_volume_change_refined": r["max_volume_change_refined"], "max_volume_change_lbs": r["max_volume_change_lbs"],
         "max_volume_change_added": r["max_volume_change_added"],
         "max_offset_heights": r["max_displacement_from_lbs_heights"],
@@ -115,15 +118,18 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=4.0, help="clip length refined per asset")
     parser.add_argument("--only", default="", help="comma-separated asset names")
     parser.add_argument("--no-mocap", action="store_true", help="skip xbot + CMU mocap")
+    parser.add_argument("--mocap-only", action="store_true", help="only xbot + CMU mocap")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "results" / "refine_assets.json")
     args = parser.parse_args()
     only = {s for s in args.only.split(",") if s} or None
     rows = []
     head = (f"{'asset':<18} {'clip':<22} {'verts':>6} {'parts':>6} {'keys':>4} {'subst':>6} {'est s':>7} {'sim s':>7} "
             f"{'vol ref':>8} {'vol lbs':>8} {'added':>7} {'off/h':>6} {'MB clip':>8} {'MB sim':>7} gate")
-    print(head, flush=True)
+    print(head + "   (wall s / CPU s / load)", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
-        for case in cases(args.seconds, only, not args.no_mocap):
+        for case in cases(args.seconds, {"xbot"} if args.mocap_only else only, not args.no_mocap):
+            if args.mocap_only and case[1] != Path(MOCAP).stem:
+                continue
             try:
                 r = run_case(*case, workdir=Path(tmp))
             except Exception as exc:  # one failing asset is a row of the table, not the end of the bench
@@ -136,7 +142,8 @@ def main() -> None:
                   f"{r['substeps']:>6} {r['estimate_s']:>7.1f} {r['simulation_s']:>7.1f} "
                   f"{r['max_volume_change_refined']:>8.4f} {r['max_volume_change_lbs']:>8.4f} "
                   f"{r['max_volume_change_added']:>7.4f} {r['max_offset_heights']:>6.4f} {r['points_MB_clip_rate']:>8.1f} "
-                  f"{r['points_MB_sim_rate']:>7.1f} {'pass' if r['gate_passes'] else 'FAIL'} {' '.join(r['gate_codes'])}",
+                  f"{r['points_MB_sim_rate']:>7.1f} {'pass' if r['gate_passes'] else 'FAIL'} {' '.join(r['gate_codes'])}"
+                  f"   ({r['total_s']:.0f} / {r['cpu_s']:.0f} / {r['load_average']})",
                   flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"seconds": args.seconds, "rows": rows}, indent=2))
