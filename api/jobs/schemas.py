@@ -6,8 +6,9 @@ import uuid
 from datetime import datetime
 from typing import Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
+from api.jobs.examples import JOB_EXAMPLE
 from api.webhooks.schemas import WebhookDeliveryOut
 
 JobStatus = Literal["queued", "running", "succeeded", "failed", "canceled"]
@@ -47,6 +48,8 @@ class InputFile(BaseModel):
 
 
 class JobOut(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [JOB_EXAMPLE]})
+
     id: uuid.UUID
     status: JobStatus
     stage: str | None

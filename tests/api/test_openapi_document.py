@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import re
 
+from api.jobs.examples import JOB_EXAMPLE
+from api.jobs.schemas import JobOut
 from api.problem_schema import ProblemDetails
 from simcore.options import JobOptions
 
@@ -65,3 +67,16 @@ def test_the_options_part_is_documented_as_json_of_job_options(client):
     assert options["allOf"] == [{"$ref": "#/components/schemas/JobOptions"}]
     JobOptions.model_validate(options["examples"][0])
     assert set(spec["components"]["schemas"]["JobOptions"]["properties"]) == set(JobOptions.model_fields)
+
+
+def test_the_job_example_fits_the_job_schema(client):
+    job = JobOut.model_validate(JOB_EXAMPLE)
+    assert job.status == "succeeded" and job.artifacts and job.warnings
+    [shown] = client.get("/openapi.json").json()["components"]["schemas"]["JobOut"]["examples"]
+    assert shown == _without_nulls(JOB_EXAMPLE)  # FastAPI leaves nulls out of the document
+
+
+def _without_nulls(node: object) -> object:
+    if isinstance(node, dict):
+        return {k: _without_nulls(v) for k, v in node.items() if v is not None}
+    return [_without_nulls(v) for v in node] if isinstance(node, list) else node
