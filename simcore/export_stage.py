@@ -5,7 +5,8 @@ Writes into state.workdir and state.artifacts:
   texture_<i>.png|jpg                          the upload's images, which the .usdc files' materials reference
   animated.glb, animated.usdc, animated.usdz   when state.animation is set
   refined.glb, refined.usdc                    when state.refined_frames is set (frames of that animation)
-  rigged.fbx, animated.fbx                     when options.fbx and Blender's bpy is there (simcore/io/fbx_export.py)
+  rigged.fbx, animated.fbx                     when options.fbx (its unit and axes) and Blender's bpy is there
+                                               (simcore/io/fbx_export.py)
 Joints are named first, by `options.naming` (simcore/export_naming.py).
 Every GLB goes through the Khronos validator and every USD through usd-core's compliance checker;
 results land in report["validation"]. A file with validator errors fails the job (code
@@ -80,9 +81,10 @@ def _write_usds(state: PipelineState, progress: StageProgress) -> list[Path]:
 
 def _write_fbxs(state: PipelineState, glbs: list[Path]) -> None:
     """rigged.fbx / animated.fbx from the validated GLBs when options.fbx asks; a missing writer is a warning."""
-    from simcore.io.fbx_export import blender_python, write_fbx
+    from simcore.io.fbx_export import blender_python, fbx_frame, write_fbx
 
-    if not state.options.fbx:
+    frame = fbx_frame(state.options.fbx)
+    if frame is None:
         return
     if blender_python() is None:
         state.warn("FBX was asked for but this worker has no FBX writer (Blender's bpy: `make fbx-writer` or "
@@ -92,10 +94,11 @@ def _write_fbxs(state: PipelineState, glbs: list[Path]) -> None:
     for glb in glbs:
         if glb.name not in ("rigged.glb", "animated.glb"):
             continue
-        result = write_fbx(glb, glb.with_suffix(".fbx"), fps=fps)
+        result = write_fbx(glb, glb.with_suffix(".fbx"), fps=fps, frame=frame)
         state.artifacts[result.path.name] = result.path
-        state.report.setdefault("export", {})[result.path.name] = {"writer": result.writer, "seconds": result.seconds,
-                                                                   "bytes": result.path.stat().st_size}
+        state.report.setdefault("export", {})[result.path.name] = {
+            "writer": result.writer, "seconds": result.seconds, "bytes": result.path.stat().st_size,
+            "units": frame.units, "up_axis": frame.up_axis}
 
 
 def _validate(state: PipelineState, glbs: list[Path], usds: list[Path]) -> None:

@@ -46,6 +46,18 @@ class RefineOptions(_Strict):
     preroll_frames: int = Field(8, ge=0, le=100, description="frames easing from the bind pose into frame 0 before output")
 
 
+class FbxOptions(_Strict):
+    """Unit and axes of rigged.fbx / animated.fbx (simcore/io/fbx_export.py); every root node in the file is identity."""
+
+    preset: Literal["unity", "unreal"] | None = Field(
+        None, description="unity: metres, Y up (imports at scale 1, no turn); unreal: centimetres, Z up")
+    units: Literal["m", "cm"] | None = Field(
+        None, description="the file's unit (UnitScaleFactor 100 or 1); default: the preset's, else cm")
+    up_axis: Literal["y", "z"] | None = Field(
+        None, description="y: Y up, the character facing +Z (glTF's axes); z: Z up, facing -Y; default: the "
+                          "preset's, else y")
+
+
 class JobOptions(_Strict):
     """Everything a job can be asked to do; every field has a working default."""
 
@@ -72,8 +84,10 @@ class JobOptions(_Strict):
                           "Unity Humanoid, generic), other skeletons descriptive (spine_01, tail_03, leg_front_L_02); "
                           "default: mixamo for predicted skeletons, the upload's own names for skeleton 'keep'",
     )
-    fbx: bool = Field(False, description="also write rigged.fbx (and animated.fbx) with Blender's FBX exporter; "
-                                        "when the worker has no bpy the job succeeds without them and says so")
+    fbx: bool | FbxOptions = Field(
+        False, description="also write rigged.fbx (and animated.fbx) with Blender's FBX exporter: true (centimetres, "
+                           "Y up) or the unit and axes, e.g. {\"preset\": \"unity\"}; when the worker has no bpy the job "
+                           "succeeds without them and says so")
     quality_gate: Literal["fail", "warn"] = Field(
         "fail", description="a result past a hard quality threshold fails the job with code quality_gate ('fail') "
                             "or succeeds with the warning flagged ('warn')",
