@@ -34,6 +34,7 @@ $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
 install-test: install $(VENV)/.installed-test
 	@command -v chromium >/dev/null || (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null)
 	@command -v assimp >/dev/null || (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq assimp-utils >/dev/null)
+	@command -v docker-compose >/dev/null || (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq docker-compose >/dev/null)
 
 # Optional FBX writer: Blender's bpy in its own venv (it needs numpy<2; ~1 GB). simcore/io/fbx_export.py finds it.
 fbx-writer:
