@@ -7,7 +7,6 @@ the service cannot be reached).
 
 from __future__ import annotations
 
-import hashlib
 import json
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -20,7 +19,7 @@ from rich.console import Console
 from rich.table import Table
 
 from cli.progress import stage_bar
-from cli.service_client import JsonOption, KeyOption, ServiceError, UrlOption, call, connect, follow_job, problem_message
+from cli.service_client import JsonOption, KeyOption, ServiceError, UrlOption, call, connect, fetch_artifact, follow_job
 
 app = typer.Typer(help="Manage jobs on a running service (list, get, cancel, delete, download, logs).", no_args_is_help=True)
 JobId = Annotated[str, typer.Argument(help="job id")]
@@ -129,26 +128,6 @@ def delete_job(job_id: JobId, url: UrlOption = None, key: KeyOption = None) -> N
     with service(url, key) as client:
         call(client, "DELETE", f"/api/v1/jobs/{job_id}", ok=(204,))
     typer.echo(f"{job_id} deleted")
-
-
-def fetch_artifact(client: httpx.Client, job_id: str, artifact: dict, out: Path) -> Path:
-    """Stream one artifact to `out`/name and check its size and sha256 against the job's record."""
-    path = out / artifact["name"]
-    digest = hashlib.sha256()
-    try:
-        with client.stream("GET", f"/api/v1/jobs/{job_id}/artifacts/{artifact['name']}") as response:
-            if response.status_code != 200:
-                response.read()
-                raise ServiceError(f"{artifact['name']}: {problem_message(response)}")
-            with path.open("wb") as f:
-                for chunk in response.iter_bytes():
-                    digest.update(chunk)
-                    f.write(chunk)
-    except httpx.HTTPError as exc:
-        raise ServiceError(f"cannot download {artifact['name']} from {client.base_url}: {exc}", 2) from exc
-    if digest.hexdigest() != artifact["sha256"]:
-        raise ServiceError(f"{path}: sha256 differs from the job's record (a damaged transfer): download again")
-    return path
 
 
 @app.command("download")

@@ -7,8 +7,10 @@ install's `.rigforge/local-api-key` (under RIGFORGE_DATA_DIR) when it exists.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Annotated, Any
 
 import httpx
@@ -99,3 +101,23 @@ def follow_job(client: httpx.Client, job: dict, on_change: Callable[[dict], None
         on_change(change)
         last = change
     return last
+
+
+def fetch_artifact(client: httpx.Client, job_id: str, artifact: dict, out: Path) -> Path:
+    """Stream one artifact to `out`/name and check its sha256 against the job's record; raises ServiceError."""
+    path = out / artifact["name"]
+    digest = hashlib.sha256()
+    try:
+        with client.stream("GET", f"/api/v1/jobs/{job_id}/artifacts/{artifact['name']}") as response:
+            if response.status_code != 200:
+                response.read()
+                raise ServiceError(f"{artifact['name']}: {problem_message(response)}")
+            with path.open("wb") as f:
+                for chunk in response.iter_bytes():
+                    digest.update(chunk)
+                    f.write(chunk)
+    except httpx.HTTPError as exc:
+        raise ServiceError(f"cannot download {artifact['name']} from {client.base_url}: {exc}", 2) from exc
+    if digest.hexdigest() != artifact["sha256"]:
+        raise ServiceError(f"{path}: sha256 differs from the job's record (a damaged transfer): download again")
+    return path

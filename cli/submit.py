@@ -21,7 +21,7 @@ import httpx
 import typer
 
 from cli.progress import count_bar, stage_bar
-from cli.service_client import KeyOption, ServiceError, UrlOption, api_key, follow_job, problem_message, service_url
+from cli.service_client import KeyOption, ServiceError, UrlOption, api_key, fetch_artifact, follow_job, problem_message, service_url
 
 MESH_SUFFIXES = (".glb", ".gltf", ".zip", ".obj", ".ply", ".stl")
 ClientFactory = Callable[[str], httpx.Client]  # idempotency key → a client for one job
@@ -73,15 +73,10 @@ def post_job(client: httpx.Client, mesh: Path, motion: Path | None, options: str
 
 
 def download(client: httpx.Client, job: dict, output: Path) -> list[Path]:
-    """Stream every artifact of a finished job into `output`; returns the written paths."""
+    """Stream every artifact of a finished job into `output` (each checked against its sha256); returns the paths.
+    Raises ServiceError."""
     output.mkdir(parents=True, exist_ok=True)
-    written = []
-    for art in job["artifacts"]:
-        with client.stream("GET", f"/api/v1/jobs/{job['id']}/artifacts/{art['name']}") as r, (output / art["name"]).open("wb") as f:
-            for chunk in r.iter_bytes():
-                f.write(chunk)
-        written.append(output / art["name"])
-    return written
+    return [fetch_artifact(client, job["id"], art, output) for art in job["artifacts"]]
 
 
 def mesh_files(inputs: list[Path]) -> list[Path]:
@@ -112,7 +107,10 @@ def _batch_job(make_client: ClientFactory, key: str, mesh: Path, motion: Path | 
             err = job.get("error") or {}
             return BatchResult(mesh, job["id"], job["status"], f"[{err.get('code')}] {err.get('message')}")
         if output is not None:
-            download(client, job, output / mesh.stem)
+            try:
+                download(client, job, output / mesh.stem)
+            except ServiceError as exc:
+                return BatchResult(mesh, job["id"], "download_failed", str(exc))
         return BatchResult(mesh, job["id"], job["status"])
 
 
@@ -203,5 +201,9 @@ def _submit_one(client: httpx.Client, mesh: Path, motion: Path | None, options: 
             err = job.get("error") or {}
             raise _fail(f"job {job['status']}: [{err.get('code')}] {err.get('message')}")
         if output:
-            for path, art in zip(download(client, job, output), job["artifacts"]):
+            try:
+                written = download(client, job, output)
+            except ServiceError as exc:
+                raise _fail(str(exc), exc.exit_code) from exc
+            for path, art in zip(written, job["artifacts"]):
                 typer.echo(f"{path}  ({art['size']} bytes)")

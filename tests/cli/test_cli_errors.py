@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import hashlib
 import sqlite3
 
+import httpx
 import pytest
 from typer.testing import CliRunner
 
 from api.db import reset_caches
 from api.settings import get_settings
+from cli import service_client
 from cli.main import app
 from cli.progress import stage_bar
 from tests.integration.conftest import free_port
@@ -62,3 +65,15 @@ def test_progress_off_a_terminal_is_one_line_per_stage_change(capsys):
         for stage, fraction in [("queued", 0.0), ("ingest", 0.1), ("ingest", 0.2), ("skeleton", 0.4), ("skeleton", 0.5)]:
             update(stage, fraction)
     assert capsys.readouterr().out.splitlines() == ["job 1234 queued 0%", "job 1234 ingest 10%", "job 1234 skeleton 40%"]
+
+
+def test_a_download_that_does_not_match_the_jobs_sha256_fails(elsewhere, monkeypatch):
+    job = {"id": "j1", "status": "succeeded", "artifacts": [{"name": "report.json", "size": 2, "sha256": hashlib.sha256(b"{}").hexdigest()}]}
+
+    def handle(request: httpx.Request) -> httpx.Response:
+        return httpx.Response(200, json=job) if request.url.path == "/api/v1/jobs/j1" else httpx.Response(200, content=b"{!")
+
+    real = httpx.Client
+    monkeypatch.setattr(service_client.httpx, "Client", lambda *a, **kw: real(*a, transport=httpx.MockTransport(handle), **kw))
+    code, err = rigforge("jobs", "download", "j1", "--url", "http://rigforge.test", "--key", "rf_x", "-o", str(elsewhere / "out"))
+    assert code == 1 and "report.json: sha256 differs from the job's record" in err

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import threading
 import time
@@ -42,7 +43,7 @@ class FakeService:
             bad = job["name"].startswith("bad")
             final = {**job, "status": "failed" if bad else "succeeded", "progress": 1.0,
                      "error": {"code": "unknown_format", "message": "not a mesh"} if bad else None,
-                     "artifacts": [] if bad else [{"name": "report.json", "size": 2}]}
+                     "artifacts": [] if bad else [{"name": "report.json", "size": 2, "sha256": hashlib.sha256(b"{}").hexdigest()}]}
             return httpx.Response(200, text=f"data: {json.dumps(final)}\n\n")
         return httpx.Response(200, content=b"{}")
 
