@@ -15,14 +15,19 @@ from pathlib import Path
 from typing import Any, BinaryIO, cast
 from urllib.parse import quote, urlsplit
 
+import boto3
+from boto3.s3.transfer import TransferConfig
+from botocore.config import Config
+from botocore.exceptions import ClientError
+
 from api.settings import Settings
 from api.storage import StagedFile, Storage, StoredFile, artifact_row
 
+# Multipart above 8 MiB, in 8 MiB parts, 4 at a time: at most 32 MiB of a file in memory, whatever its size.
+TRANSFER = {"multipart_threshold": 8 * 1024 * 1024, "multipart_chunksize": 8 * 1024 * 1024, "max_concurrency": 4}
+
 
 def _client(endpoint_url: str | None) -> Any:
-    import boto3
-    from botocore.config import Config
-
     # Path-style addressing works on every S3-compatible service; AWS still accepts it.
     config = Config(signature_version="s3v4", s3={"addressing_style": "path"}, retries={"mode": "standard"})
     return boto3.client("s3", endpoint_url=endpoint_url, config=config)
@@ -35,6 +40,7 @@ class S3Storage(Storage):
         super().__init__(scratch_root)
         self.bucket, self.prefix = bucket, prefix.strip("/")
         self.client, self.presign_client = client, presign_client
+        self.transfer = TransferConfig(**TRANSFER)
 
     @classmethod
     def from_settings(cls, settings: Settings) -> S3Storage:
@@ -62,12 +68,10 @@ class S3Storage(Storage):
     def keep(self, staged: StagedFile) -> StoredFile:
         key = self._key("uploads", staged.sha256)
         if not self._has(key, staged.size):  # the same bytes were kept before
-            self.client.upload_file(str(staged.path), self.bucket, key)
+            self.client.upload_file(str(staged.path), self.bucket, key, Config=self.transfer)
         return StoredFile(self._locator(key), staged.size, staged.sha256)
 
     def _has(self, key: str, size: int) -> bool:
-        from botocore.exceptions import ClientError
-
         try:
             return int(self.client.head_object(Bucket=self.bucket, Key=key)["ContentLength"]) == size
         except ClientError as exc:
@@ -78,14 +82,14 @@ class S3Storage(Storage):
     def fetch(self, locator: str, scratch: Path) -> Path:
         bucket, key = self._split(locator)
         local = scratch / f"{uuid.uuid4().hex}-{key.rsplit('/', 1)[-1]}"
-        self.client.download_file(bucket, key, str(local))
+        self.client.download_file(bucket, key, str(local), Config=self.transfer)
         return local
 
     def publish(self, work_dir: Path, job_id: uuid.UUID, attempt: int, names: list[str]) -> list[dict]:
         rows = []
         for name in names:
             key = self._key("jobs", str(job_id), str(attempt), name)
-            self.client.upload_file(str(work_dir / name), self.bucket, key)
+            self.client.upload_file(str(work_dir / name), self.bucket, key, Config=self.transfer)
             rows.append(artifact_row(name, work_dir / name, self._locator(key)))
         self.discard(work_dir)
         return rows
