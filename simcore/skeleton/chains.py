@@ -29,8 +29,7 @@ def sheet_chain(parts: list[SurfacePart], ratio: float, spacing: float, max_join
     parts: the mesh's connected parts (surface_parts). A sheet (thickness < `ratio` × length) has no solid to
     thin; artists rig a strip, flag or card as one chain of even segments, max(`spacing`, sheet width) long, with
     a joint where each segment starts (the segment's pivot) and none on the far edge, which would bend nothing
-    (the glTF specification's SimpleSkin strip: two joints, at its base and its middle; the tip pulled 0.7 back
-    from the far edge instead left a last bone 0.15 × the length long). Each part holding SHEET_PART_AREA of the
+    (a joint pulled back from the far edge instead would leave a stub last bone). Each part holding SHEET_PART_AREA of the
     area must be flat itself (two solids far apart are flat as a whole, and a chain through the empty space
     between them is no skeleton); the chain follows those parts, smaller ones (a button) take their weights from
     it.

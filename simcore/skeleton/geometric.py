@@ -282,7 +282,7 @@ def _closed_solid(v: np.ndarray, faces: np.ndarray, params: GeometricParams) -> 
     """Voxelise with the smallest closing, then retry with a stronger one; keep the stronger closing only when it
     shortens the medial axis by more than `close_drop` (a gap-sized hole made thinning trace round a cavity) and
     its medial axis stays inside the lightly closed solid (the closing filled a hole in a body, not the space
-    between separate parts, e.g. BrainStem's rigid pieces, whose joints would then float outside the mesh).
+    between separate rigid parts, whose joints would then float outside the mesh).
 
     Returns (grid, medial forest, close radius used). Unsupervised: no ground truth, one criterion for all meshes.
     """
