@@ -41,10 +41,14 @@ def _note_pool_size(instance: object, **_: object) -> None:
 
 
 @worker_process_init.connect
-def _cap_pool_process_memory(**_: object) -> None:
-    """Each pool process may use its share of memory: a job past it fails with out_of_memory, the process lives."""
+def _init_pool_process(**_: object) -> None:
+    """A new pool process: its own database connections, and its share of memory (a job past it fails with
+    out_of_memory, the process lives)."""
+    from api.db import get_engine
     from simcore.budgets import apply_memory_cap
 
+    if get_engine.cache_info().currsize:  # the pooled connections forked with us are the main process's: two
+        get_engine().dispose(close=False)  # processes on one socket corrupt both, so drop them without closing
     apply_memory_cap(get_settings().budgets.memory_cap_bytes(_pool_size))
 
 
