@@ -29,7 +29,7 @@ def swagger_ui() -> HTMLResponse:
                                swagger_js_url=f"{ASSETS_URL}/swagger-ui/swagger-ui-bundle.js",
                                swagger_css_url=f"{ASSETS_URL}/swagger-ui/swagger-ui.css",
                                swagger_favicon_url=f"{ASSETS_URL}/swagger-ui/favicon-32x32.png",
-                               swagger_ui_parameters={"persistAuthorization": True, "displayOperationId": True})
+                               swagger_ui_parameters={"displayOperationId": True})
 
 
 @router.get("/redoc")
