@@ -148,7 +148,8 @@ def upload_all(base: str, key: str, data: bytes, count: int) -> dict:
     """`count` threads POST `data` at once (retrying 503/429 after Retry-After); wall time and latency per upload."""
     results: list[tuple[float, int, int]] = []
     lock = threading.Lock()
-    barrier = threading.Barrier(count)
+    released: list[float] = []  # when every client is ready to send: the wall time starts there
+    barrier = threading.Barrier(count, action=lambda: released.append(time.perf_counter()))
 
     def one() -> None:
         retries = 0
@@ -164,13 +165,12 @@ def upload_all(base: str, key: str, data: bytes, count: int) -> dict:
         with lock:
             results.append((time.perf_counter() - started, r.status_code, retries))
 
-    started = time.perf_counter()
     threads = [threading.Thread(target=one) for _ in range(count)]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
-    wall = time.perf_counter() - started
+    wall = time.perf_counter() - released[0]
     seconds = [r[0] for r in results]
     return {"wall_s": round(wall, 2), "p50_s": round(statistics.median(seconds), 2), "p99_s": round(percentile(seconds, 99), 2),
             "mb_per_s": round(count * len(data) / 2**20 / wall, 1), "accepted": sum(r[1] == 202 for r in results),
