@@ -25,6 +25,14 @@ WEB_DIR = Path(__file__).resolve().parents[1] / "web"
 BODY_SLACK_BYTES = 1024 * 1024
 
 
+API_DESCRIPTION = """Automatic rigging and skinning of 3D characters.
+
+Every `/api/v1` route needs an API key as `Authorization: Bearer <key>` (`rigforge keys create` on the server).
+Every error is `application/problem+json` (the `ProblemDetails` schema) with a stable `code`, and `field` when one
+input is to blame. Upload a mesh with `submitJob`, follow it with `getJob` or `streamJobEvents`, then download
+its artifacts."""
+
+
 def create_app() -> FastAPI:
     settings = get_settings()
     settings.data_dir.mkdir(parents=True, exist_ok=True)
@@ -32,7 +40,7 @@ def create_app() -> FastAPI:
     spool.mkdir(parents=True, exist_ok=True)
     tempfile.tempdir = str(spool)  # multipart spooling stays inside the data directory
     app = DocumentedAPI(title="RigForge", version="0.1.0", generate_unique_id_function=operation_id, docs_url=None, redoc_url=None,
-                        description="Automatic rigging and skinning of 3D characters.")
+                        description=API_DESCRIPTION)
     errors.install(app)
     access_log.install()  # no keys or signed links in access log lines
     app.include_router(docs_pages.router)
