@@ -27,7 +27,8 @@ BODY_SLACK_BYTES = 1024 * 1024
 
 API_DESCRIPTION = """Automatic rigging and skinning of 3D characters.
 
-Every `/api/v1` route needs an API key as `Authorization: Bearer <key>` (`rigforge keys create` on the server).
+Every `/api/v1` route needs an API key as `Authorization: Bearer <key>` (`rigforge keys create` on the server),
+but the signed download links a job's JSON gives (`/api/v1/files/...`).
 Every error is `application/problem+json` (the `ProblemDetails` schema) with a stable `code`, and `field` when one
 input is to blame. Upload a mesh with `submitJob`, follow it with `getJob` or `streamJobEvents`, then download
 its artifacts."""
