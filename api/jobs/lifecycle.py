@@ -8,6 +8,7 @@ file goes only once no asset row names it.
 from __future__ import annotations
 
 import logging
+import time
 import uuid
 from datetime import timedelta
 
@@ -114,8 +115,26 @@ def sweep_orphans(settings: Settings, storage: Storage | None = None) -> tuple[i
     return len(uploads), len(outputs)
 
 
+def sweep_scratch(settings: Settings, storage: Storage | None = None) -> int:
+    """Delete this host's scratch entries (staged uploads, job work and input folders) that no live request or job
+    can still use: older than a job's hard time limit plus the orphan grace (a killed worker leaves them).
+    Returns how many were deleted."""
+    storage = storage or get_storage()
+    cutoff = time.time() - settings.jobs.time_limit - settings.orphan_grace_seconds
+    stale = [entry for entry in storage.scratch.iterdir() if entry.stat().st_mtime < cutoff]
+    for entry in stale:
+        if entry.is_dir():
+            storage.discard(entry)
+        else:
+            entry.unlink(missing_ok=True)
+    if stale:
+        log.info("cleanup: deleted %d stale scratch entries", len(stale))
+    return len(stale)
+
+
 def cleanup(settings: Settings) -> None:
-    """The periodic cleanup: retention, then orphans."""
+    """The periodic cleanup: retention, orphans, stale scratch space."""
     storage = get_storage()
     sweep_retention(settings, storage)
     sweep_orphans(settings, storage)
+    sweep_scratch(settings, storage)

@@ -13,7 +13,7 @@ import trimesh
 from sqlalchemy import update
 
 from api.db import session_scope
-from api.jobs.lifecycle import sweep_orphans, sweep_retention
+from api.jobs.lifecycle import sweep_orphans, sweep_retention, sweep_scratch
 from api.jobs.state import now
 from api.keys.service import find_active
 from api.models import Job
@@ -159,3 +159,14 @@ def test_delete_and_the_orphan_sweep_leave_no_stored_file_on_either_backend(clie
     time.sleep(1.0)
     assert sweep_orphans(get_settings()) == (1, 0)
     assert not [n for n in stored_names() if "uploads/" in n]
+
+
+def test_the_cleanup_removes_scratch_space_a_killed_worker_left(client, data_dir):
+    scratch = data_dir / "storage" / "tmp"
+    left, live = scratch / "job-3fa85f64-1", scratch / "job-3fa85f64-2"
+    for folder in (left, live):
+        (folder / "part").mkdir(parents=True)
+    long_ago = time.time() - get_settings().jobs.time_limit - get_settings().orphan_grace_seconds - 60
+    os.utime(left, (long_ago, long_ago))
+    assert sweep_scratch(get_settings()) == 1
+    assert not left.exists() and live.exists()
