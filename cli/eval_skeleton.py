@@ -39,6 +39,10 @@ def render(report: dict, console: Console) -> None:
         table.add_row(row["name"], row["category"], row["method"], *_metric_cells(row), _fmt(row["seconds"], 2), note)
     for method, mean in report["mean"].items():
         note = f"{mean['assets']} assets" + (f", {mean['failed']} failed" if mean["failed"] else "")
+        if "joint_ratio_ok" in mean:
+            note += f", joints 0.5-2x {mean['joint_ratio_ok']:.0%}"
+        if "beats_voxel" in mean:
+            note += f", beats voxel {mean['beats_voxel']:.0%}"
         table.add_row("MEAN", "", method, *_metric_cells(mean), _fmt(mean.get("seconds"), 2), note, style="bold")
     console.print(table)
     cats = Table("category", "method", "assets", "J2J", "J2B", "B2B", "joints pred/gt", "inside", title="Per-category means")

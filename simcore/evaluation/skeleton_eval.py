@@ -42,6 +42,7 @@ CANDIDATE_METHODS = ("humanoid", "geometric", "thinning", "learned")  # the rows
 METHODS = ("all", "voxel", *PREDICTED_METHODS)
 __all__ = ["AssetResult", "EvalCase", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "load_case",
            "read_categories", "resolve_methods"]
+JOINT_RATIO = (0.5, 2.0)  # a predicted joint count within this factor of the artist's is plausible
 METRIC_KEYS = ("j2j", "j2b", "b2b", "joints_pred", "joints_gt", "joint_ratio", "inside", "seconds")
 
 
@@ -81,15 +82,24 @@ class SkeletonEvaluation:
         return list(dict.fromkeys(r.method for r in self.results))
 
     def mean(self, method: str, category: str | None = None) -> dict:
-        """Mean of every metric over the successful rows of `method` (optionally one category)."""
+        """Mean of every metric over the successful rows of `method` (optionally one category), the share of them
+        whose joint count is within JOINT_RATIO of the artist's, and the share with a lower J2J than the voxel
+        baseline on the same asset (when it ran)."""
         rows = [r.to_dict() for r in self.results
                 if r.method == method and r.scores is not None and (category is None or r.category == category)]
         failed = sum(1 for r in self.results if r.method == method and r.error is not None
                      and (category is None or r.category == category))
         out: dict = {"assets": len(rows), "failed": failed}
+        if not rows:
+            return out
         for key in METRIC_KEYS:
-            if rows:
-                out[key] = round(float(np.mean([row[key] for row in rows])), 6)
+            out[key] = round(float(np.mean([row[key] for row in rows])), 6)
+        lo, hi = JOINT_RATIO
+        out["joint_ratio_ok"] = round(float(np.mean([lo <= row["joint_ratio"] <= hi for row in rows])), 4)
+        voxel = {r.name: r.scores.j2j for r in self.results if r.method == "voxel" and r.scores is not None}
+        paired = [row["j2j"] < voxel[row["name"]] for row in rows if row["name"] in voxel]
+        if method != "voxel" and paired:
+            out["beats_voxel"] = round(float(np.mean(paired)), 4)
         return out
 
     def categories(self) -> list[str]:

@@ -13,8 +13,9 @@ from typer.testing import CliRunner
 
 from cli.eval_skeleton import eval_skeleton
 from simcore.errors import InvalidInput
-from simcore.evaluation.skeleton_eval import evaluate_directory, read_categories, resolve_methods
+from simcore.evaluation.skeleton_eval import AssetResult, SkeletonEvaluation, evaluate_directory, read_categories, resolve_methods
 from simcore.evaluation.voxel_baseline import voxel_skeleton_graph
+from simcore.metrics.skeleton import SkeletonScores
 
 
 @pytest.fixture
@@ -72,3 +73,14 @@ def test_split_keeps_the_files_the_manifest_lists_for_it(small_dir) -> None:
                                             "simple\trigged_simple.glb\ttoy\ttrain\n")
     report = evaluate_directory(small_dir, "voxel", split="val").to_dict()
     assert [(a["name"], a["category"]) for a in report["assets"]] == [("rignet_15930_bat", "flyer")]
+
+
+def test_means_count_plausible_joint_counts_and_wins_over_the_voxel_baseline() -> None:
+    def row(name: str, method: str, j2j: float, joints: int) -> AssetResult:
+        return AssetResult(name, "x", method, SkeletonScores(j2j, j2j, j2j, joints, 10, 1.0), 0.1)
+
+    evaluation = SkeletonEvaluation([row("a", "voxel", 0.05, 90), row("b", "voxel", 0.05, 80),
+                                     row("a", "auto", 0.04, 12), row("b", "auto", 0.06, 30)])
+    auto, voxel = evaluation.mean("auto"), evaluation.mean("voxel")
+    assert auto["joint_ratio_ok"] == 0.5 and auto["beats_voxel"] == 0.5  # b has 3x the joints and a higher J2J
+    assert voxel["joint_ratio_ok"] == 0.0 and "beats_voxel" not in voxel
