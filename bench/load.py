@@ -3,7 +3,8 @@ uploads, on the embedded default (SQLite + file broker) and on PostgreSQL + Redi
 
 Each backend runs a real `rigforge serve` (uvicorn, one embedded worker) in a fresh data directory. The worker is
 kept busy with full-pipeline jobs on the dev fox (a generated box when ../shared is absent) while `--pollers`
-threads GET one job for `--seconds`: first plain GETs, then conditional ones (If-None-Match: the 304 path). Then
+threads GET one job for `--seconds`: first plain GETs, then conditional ones (If-None-Match: the 304 path), after
+the same clients on `/healthz` (no key, no database: the reference of the HTTP stack on this machine, this run). Then
 `--uploads` threads each POST a `--upload-mb` GLB at once; a 503/429 is retried after its Retry-After, and
 counted. Rate limits and quotas are off so that the server, not the per-key limits, is measured. Prints a table
 and writes bench/results/load.json.
@@ -115,8 +116,8 @@ def percentile(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) if values else float("nan")
 
 
-def poll(base: str, key: str, job_id: str, threads: int, seconds: float, conditional: bool) -> dict:
-    """`threads` clients GET the job back to back for `seconds`; polls/s and latency percentiles (ms)."""
+def poll(base: str, key: str, path: str, threads: int, seconds: float, conditional: bool) -> dict:
+    """`threads` clients GET `path` back to back for `seconds`; polls/s and latency percentiles (ms)."""
     latencies: list[list[float]] = [[] for _ in range(threads)]
     statuses: dict[int, int] = {}
     lock = threading.Lock()
@@ -126,10 +127,10 @@ def poll(base: str, key: str, job_id: str, threads: int, seconds: float, conditi
         headers = {"Authorization": f"Bearer {key}"}
         with httpx.Client(base_url=base, headers=headers, timeout=30) as http:
             if conditional:
-                headers["If-None-Match"] = http.get(f"/api/v1/jobs/{job_id}").headers["etag"]
+                headers["If-None-Match"] = http.get(path).headers["etag"]
             while time.monotonic() < stop:
                 started = time.perf_counter()
-                r = http.get(f"/api/v1/jobs/{job_id}", headers=headers)
+                r = http.get(path, headers=headers)
                 latencies[slot].append((time.perf_counter() - started) * 1000)
                 with lock:
                     statuses[r.status_code] = statuses.get(r.status_code, 0) + 1
@@ -200,11 +201,12 @@ def measure(name: str, env: dict[str, str], args: argparse.Namespace, upload: by
     with serve(env) as (base, key):
         ids = busy_jobs(base, key, args.busy_jobs)
         busy_before = running(base, key)
-        plain = poll(base, key, ids[0], args.pollers, args.seconds, conditional=False)
-        cond = poll(base, key, ids[-1], args.pollers, args.seconds, conditional=True)
+        reference = poll(base, key, "/healthz", args.pollers, args.seconds, conditional=False)
+        plain = poll(base, key, f"/api/v1/jobs/{ids[0]}", args.pollers, args.seconds, conditional=False)
+        cond = poll(base, key, f"/api/v1/jobs/{ids[-1]}", args.pollers, args.seconds, conditional=True)
         busy_after = running(base, key)
         uploads = upload_all(base, key, upload, args.uploads)
-    return {"backend": name, "poll": plain, "poll_if_none_match": cond, "uploads": uploads,
+    return {"backend": name, "healthz_reference": reference, "poll": plain, "poll_if_none_match": cond, "uploads": uploads,
             "worker_running_jobs": [busy_before, busy_after]}
 
 
@@ -213,7 +215,7 @@ def main() -> None:
     parser.add_argument("--backends", default="embedded,postgres", help="comma-separated: embedded, postgres")
     parser.add_argument("--seconds", type=float, default=10.0, help="length of each polling run")
     parser.add_argument("--pollers", type=int, default=8, help="concurrent polling clients")
-    parser.add_argument("--busy-jobs", type=int, default=3, help="full-pipeline jobs queued to keep the worker busy")
+    parser.add_argument("--busy-jobs", type=int, default=4, help="full-pipeline jobs queued to keep the worker busy")
     parser.add_argument("--uploads", type=int, default=20, help="concurrent uploads")
     parser.add_argument("--upload-mb", type=float, default=5.0, help="size of each uploaded GLB")
     args = parser.parse_args()
@@ -230,7 +232,8 @@ def main() -> None:
             parser.error(f"unknown backend {name!r}")
     print(f"{'backend':<26} {'test':<34} {'rate':>11} {'p50':>9} {'p99':>9}  notes")
     for r in rows:
-        p, c, u = r["poll"], r["poll_if_none_match"], r["uploads"]
+        h, p, c, u = r["healthz_reference"], r["poll"], r["poll_if_none_match"], r["uploads"]
+        print(f"{r['backend']:<26} {'GET /healthz (reference: no DB)':<34} {h['polls_per_s']:>9}/s {h['p50_ms']:>6} ms {h['p99_ms']:>6} ms")
         print(f"{r['backend']:<26} {f'GET job ({args.pollers} clients)':<34} {p['polls_per_s']:>9}/s {p['p50_ms']:>6} ms {p['p99_ms']:>6} ms"
               f"  worker running {r['worker_running_jobs'][0]} job(s) before, {r['worker_running_jobs'][1]} after")
         print(f"{r['backend']:<26} {'GET job, If-None-Match (304)':<34} {c['polls_per_s']:>9}/s {c['p50_ms']:>6} ms {c['p99_ms']:>6} ms"
