@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from cli import eval_gate, eval_motion, eval_skeleton, eval_skin, fit, jobs, keys, rig, server, submit, train, validate
+from cli import eval_gate, eval_motion, eval_motion_rig, eval_skeleton, eval_skin, fit, jobs, keys, rig, server, submit, train, validate
 
 app = typer.Typer(help="RigForge: automatic rigging and skinning.", no_args_is_help=True, pretty_exceptions_enable=False)
 eval_app = typer.Typer(help="Quality evaluations on a directory of rigged assets.", no_args_is_help=True)
@@ -23,6 +23,7 @@ app.add_typer(train.app, name="train")
 eval_app.command("skeleton")(eval_skeleton.eval_skeleton)
 eval_app.command("skin")(eval_skin.eval_skin)
 eval_app.command("motion")(eval_motion.eval_motion)
+eval_app.command("motion-rig")(eval_motion_rig.eval_motion_rig)
 eval_app.command("gate")(eval_gate.eval_gate)
 
 if __name__ == "__main__":

@@ -16,11 +16,16 @@ def _procrustes(source: np.ndarray, target: np.ndarray, mass: np.ndarray) -> np.
 
     source: (N, 3) centred rest points; target: (T, N, 3) centred targets; mass: (N,) non-negative.
     """
-    cov = np.einsum("n,ni,tnj->tji", mass, source, target)  # sum target source^T, (T, 3, 3)
+    cov = np.swapaxes((source * mass[:, None]).T @ target, 1, 2)  # sum target source^T, (T, 3, 3)
     u, _, vt = np.linalg.svd(cov)
     flip = np.sign(np.linalg.det(u @ vt))
     u[:, :, 2] *= flip[:, None]
     return u @ vt
+
+
+def _turned(rot: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(T, N, 3) points (N, 3) turned by each rotation (T, 3, 3)."""
+    return np.matmul(points[None], np.swapaxes(rot, 1, 2))
 
 
 def _subtrees(parents: np.ndarray) -> list[np.ndarray]:
@@ -60,30 +65,34 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
 
     def contribution(b: int) -> np.ndarray:  # (T, n_b, 3) bone b's weighted share of its vertices
         on = support[b]
-        return weights[on, b, None] * (np.einsum("tij,vj->tvi", rot[:, b], rest[on]) + trans[:, b, None])
+        return weights[on, b, None] * (_turned(rot[:, b], rest[on]) + trans[:, b, None])
 
     shares = [contribution(b) for b in range(count)]
     fit = np.zeros_like(frames)
     for b in range(count):
         fit[:, support[b]] += shares[b]
     subtrees = _subtrees(parents)
+    below = np.zeros((count, count))
+    for b, sub in enumerate(subtrees):
+        below[sub, b] = 1.0
+    subtree_share = weights @ below  # (V, B) weight each vertex gives to bone b's subtree
 
     def _move_joint(b: int) -> None:
         """Exact least-squares step of joint b: it shifts every translation of b's subtree by (R_p - R_b) dp."""
-        share = weights[:, subtrees[b]].sum(axis=1)
+        share = subtree_share[:, b]
         on = np.flatnonzero(share > 0)
         s_on = share[on]
         lever = rot[:, parents[b]] - rot[:, b]  # (T, 3, 3)
-        residual = frames[:, on] - fit[:, on]
+        pull = np.tensordot(s_on, frames[:, on] - fit[:, on], axes=(0, 1))  # (T, 3) share-weighted residual
         lhs = np.einsum("tki,tkj->ij", lever, lever) * float(s_on @ s_on) + joint_regularisation * steps * np.eye(3)
-        rhs = np.einsum("tki,tvk,v->i", lever, residual, s_on)
+        rhs = np.einsum("tki,tk->i", lever, pull)
         step = np.linalg.solve(lhs, rhs)
         shift = lever @ step  # (T, 3)
         joints[b] += step
         trans[:, subtrees[b]] += shift[:, None]
         fit[:, on] += s_on[None, :, None] * shift[:, None]
         for c in subtrees[b].tolist():
-            shares[c] = contribution(c)
+            shares[c] += weights[support[c], c, None] * shift[:, None]
 
     kids = [[c for c in range(count) if parents[c] == b and not floating[c] and len(support[c])] for b in range(count)]
 
@@ -92,8 +101,8 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
         on, w = support[c], weights[support[c], c]
         target = (frames[:, on] - fit[:, on] + shares[c]) / w[:, None]
         mass = w * w
-        heads = target - np.einsum("tij,vj->tvi", rot[:, c], rest[on] - joints[c])
-        return np.einsum("v,tvi->ti", mass, heads) / mass.sum(), float(mass.sum())
+        heads = target - _turned(rot[:, c], rest[on] - joints[c])
+        return np.tensordot(mass, heads, axes=(0, 1)) / mass.sum(), float(mass.sum())
 
     for _ in range(sweeps):
         for b in range(count):
@@ -110,7 +119,7 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
                 continue
             if floating[b]:
                 pivot = (mass @ source) / mass.sum()
-                goal = np.einsum("v,tvi->ti", mass, target) / mass.sum()
+                goal = np.tensordot(mass, target, axes=(0, 1)) / mass.sum()
             else:
                 pivot = joints[b]
                 goal = np.einsum("tij,j->ti", rot[:, b], joints[b]) + trans[:, b]

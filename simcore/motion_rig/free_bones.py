@@ -41,9 +41,21 @@ def _solver_module():  # noqa: ANN202 - the native module has no stubs
 
 def _prepared(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, bones: int, max_influences: int,
               iterations: int):  # noqa: ANN202
+    """A Dem Bones solver loaded with one subject (the layout py_dem_bones.portable uses; faces are our own
+    checked triangles, so its per-face Python validation is skipped)."""
     portable = _solver_module()
-    solver = portable._prepare_solver(rest, frames, int(bones), faces=faces, max_influences=max_influences,
-                                      iterations=iterations)
+    from py_dem_bones import DemBones
+
+    solver = DemBones()
+    count, steps = rest.shape[0], frames.shape[0]
+    solver.nV, solver.nF, solver.nS, solver.nB = count, steps, 1, int(bones)
+    solver.nnz = int(min(max_influences, bones))
+    solver.nIters = int(iterations)
+    solver.fStart = np.array([0, steps], dtype=np.int32)
+    solver.subjectID = np.zeros(steps, dtype=np.int32)
+    solver.u = np.ascontiguousarray(rest.T, dtype=np.float64)
+    solver.v = np.ascontiguousarray(frames.transpose(0, 2, 1).reshape(3 * steps, count), dtype=np.float64)
+    solver.fv = np.asarray(faces, dtype=np.int64).tolist()
     return portable, solver
 
 

@@ -26,17 +26,20 @@ Progress = Callable[[float], None]
 class MotionRigParams:
     """How a sequence is rigged.
 
-    bones: a fixed bone count; None chooses it: the smallest of `search_counts` (and `max_bones`) whose free-bone
-    fit reaches `target_rmse` (a share of the first frame's bounding-box diagonal), else `max_bones`.
+    bones: a fixed bone count; None chooses it along `search_counts` (capped by `max_bones`): the first count whose
+    free-bone fit reaches `target_rmse` (a share of the first frame's bounding-box diagonal), or that Dem Bones
+    cannot fill, or the count before one that cuts the error by less than `min_gain`; else `max_bones`.
     """
 
     max_influences: int = 4
     bones: int | None = None
     max_bones: int = 64
-    target_rmse: float = 0.005
-    search_counts: tuple[int, ...] = (8, 16, 32, 48, 64, 96, 128, 192, 256)
-    search_iterations: int = 10  # Dem Bones iterations while choosing the count
-    iterations: int = 30  # Dem Bones iterations of the chosen count's fit
+    target_rmse: float = 0.0005
+    min_gain: float = 0.15
+    search_counts: tuple[int, ...] = (8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
+    search_frames: int = 25  # frames (evenly spread) the count search fits
+    search_iterations: int = 5  # Dem Bones iterations while choosing the count
+    iterations: int = 20  # Dem Bones iterations of the chosen count's fit
     spread: int = 2  # 1-ring steps that make neighbouring bones' regions meet
     pivot_regularisation: float = 3e-4
     slide_mismatch: float = 0.01  # share of the diagonal: a bone pair that far from turning about a point slides
@@ -89,17 +92,22 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, s
     """The free-bone fit at the chosen count (full iterations) and the (count, rmse) trail of the search."""
     counts = _counts(params)
     trail: list[dict[str, float]] = []
-    chosen = counts[-1]
+    chosen, before = counts[-1], None
+    sample = frames[np.unique(np.linspace(0, len(frames) - 1, params.search_frames).astype(np.int64))]
     for i, count in enumerate(counts):
         if len(counts) == 1:
             break
-        fit = _free_fit(rest, frames, faces, seams, count, params, params.search_iterations)
-        error = _error(rest, frames, fit)
+        fit = _free_fit(rest, sample, faces, seams, count, params, params.search_iterations)
+        error = _error(rest, sample, fit)
         trail.append({"bones": fit.num_bones, "asked": count, "rmse": round(error, 6)})
         progress(0.5 * (i + 1) / len(counts))
-        if error <= params.target_rmse or fit.num_bones < count:  # good enough, or no more bones to split off
-            chosen = count
+        if before is not None and error > (1.0 - params.min_gain) * before[1]:
+            chosen = before[0]  # the curve has flattened: more bones fit detail, not joints
             break
+        if error <= params.target_rmse or (before is not None and fit.num_bones <= before[2]):
+            chosen = count  # close enough, or Dem Bones splits off no more bones
+            break
+        before = (count, error, fit.num_bones)
     return _free_fit(rest, frames, faces, seams, chosen, params, params.iterations), trail
 
 
