@@ -84,3 +84,28 @@ def random_sequence(doc: GltfDocument, asset: RiggedAsset, frames: int, seed: in
     posed = linear_blend(rest, weights, random_motion(skeleton, frames, seed))
     truth = used_skeleton(skeleton, used_joints(skeleton, weights))
     return PosedSequence(rest, asset.faces, posed, 30.0, truth, f"random seed {seed}")
+
+
+def tube_sequence(rings: int, around: int, joints: int, frames: int, seed: int = 0) -> PosedSequence:
+    """A closed-ring tube along +X (length 1 m, radius 0.06 m) of rings × around vertices, skinned to a chain of
+    `joints` joints with linear blends between neighbours, posed by `random_motion` over `frames` frames."""
+    x = np.linspace(0.0, 1.0, rings)
+    theta = np.linspace(0.0, 2 * np.pi, around, endpoint=False)
+    rest = np.stack(np.broadcast_arrays(x[:, None], 0.06 * np.cos(theta)[None], 0.06 * np.sin(theta)[None]), -1)
+    rest = rest.reshape(-1, 3)
+    ring = np.arange(rings - 1)[:, None] * around
+    a = ring + np.arange(around)[None]
+    b = ring + (np.arange(around)[None] + 1) % around
+    faces = np.concatenate([np.stack([a, b, a + around], -1), np.stack([b, b + around, a + around], -1)]).reshape(-1, 3)
+    heads = np.linspace(0.0, 1.0, joints, endpoint=False)
+    skeleton = Skeleton(np.stack([heads, np.zeros(joints), np.zeros(joints)], 1), np.arange(joints) - 1,
+                        [f"j{i}" for i in range(joints)])
+    spacing = 1.0 / joints
+    at = np.clip((rest[:, 0] - heads[0]) / spacing - 0.5, 0.0, joints - 1.0)  # blend between bone middles
+    low = np.minimum(np.floor(at).astype(np.int64), joints - 2) if joints > 1 else np.zeros(len(rest), np.int64)
+    frac = at - low
+    rows = np.repeat(np.arange(len(rest)), 2)
+    cols = np.stack([low, np.minimum(low + 1, joints - 1)], 1).reshape(-1)
+    weights = sp.csr_matrix((np.stack([1 - frac, frac], 1).reshape(-1), (rows, cols)), shape=(len(rest), joints))
+    posed = linear_blend(rest, weights, random_motion(skeleton, frames, seed))
+    return PosedSequence(rest, faces.astype(np.int64), posed, 30.0, skeleton, f"random seed {seed}")

@@ -79,6 +79,24 @@ def solve_free_bones(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, bo
     return _compact(BoneFit(result.weights.T.copy(), result.transforms))
 
 
+def solve_from_clusters(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, bones: int, *,
+                        max_influences: int, iterations: int) -> BoneFit:
+    """Dem Bones started from `bones` k-means clusters of the vertex trajectories (rigidly bound), for sequences
+    where its own cluster splitting stalls."""
+    from sklearn.cluster import KMeans
+
+    trajectories = frames.transpose(1, 0, 2).reshape(frames.shape[1], -1)
+    labels = KMeans(n_clusters=int(bones), n_init=1, random_state=0).fit_predict(trajectories)
+    start = np.zeros((int(bones), len(rest)))
+    start[labels, np.arange(len(rest))] = 1.0
+    portable, solver = _prepared(rest, frames, faces, bones, max_influences, iterations)
+    solver.set_weights(start)
+    with _one_thread():
+        solver.compute()
+    result = portable._read_skinning_result(solver)
+    return _compact(BoneFit(result.weights.T.copy(), result.transforms))
+
+
 def solve_weights(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, fit: BoneFit, *, max_influences: int,
                   iterations: int) -> np.ndarray:
     """(V, B) weights re-solved by Dem Bones for the fixed `fit.transforms`, starting from `fit.weights`."""

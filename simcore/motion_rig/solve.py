@@ -12,7 +12,14 @@ import scipy.sparse as sp
 
 from simcore.motion.types import JointAnimation
 from simcore.motion_rig.connected_solve import connected_transforms
-from simcore.motion_rig.free_bones import BoneFit, reconstruct, rmse, solve_free_bones, solve_weights
+from simcore.motion_rig.free_bones import (
+    BoneFit,
+    reconstruct,
+    rmse,
+    solve_free_bones,
+    solve_from_clusters,
+    solve_weights,
+)
 from simcore.motion_rig.hierarchy import bone_tree
 from simcore.motion_rig.joint_animation import joint_animation
 from simcore.motion_rig.joints import bone_pairs
@@ -74,17 +81,15 @@ def _error(rest: np.ndarray, frames: np.ndarray, fit: BoneFit) -> float:
 
 def _free_fit(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, seams: np.ndarray, count: int,
               params: MotionRigParams, iterations: int) -> BoneFit:
-    """Dem Bones on the surface with its seams closed; on the upload's own triangles when that stalls.
-
-    Dem Bones grows bones by splitting clusters over the surface, which can stall on the joined surface of a
-    model built from overlapping pieces; the better of both fits is kept then.
-    """
+    """Dem Bones on the surface with its seams closed; started from k-means clusters of the trajectories when
+    its own cluster splitting stalls short of `count` bones (the better of both fits is kept then)."""
     surface = np.concatenate([faces, seams]) if len(seams) else faces
     fit = solve_free_bones(rest, frames, surface, count, max_influences=params.max_influences, iterations=iterations)
-    if fit.num_bones >= count or not len(seams):
+    if fit.num_bones >= count or count > len(rest):
         return fit
-    plain = solve_free_bones(rest, frames, faces, count, max_influences=params.max_influences, iterations=iterations)
-    return plain if _error(rest, frames, plain) < _error(rest, frames, fit) else fit
+    clustered = solve_from_clusters(rest, frames, surface, count, max_influences=params.max_influences,
+                                    iterations=iterations)
+    return clustered if _error(rest, frames, clustered) < _error(rest, frames, fit) else fit
 
 
 def choose_free_bones(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, seams: np.ndarray,
