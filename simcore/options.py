@@ -38,7 +38,7 @@ class RefineOptions(_Strict):
                                  "(default: as few as the CFL bounds of the material and the drivers allow)")
     rate: float = Field(30.0, ge=10, le=60, description="simulation frame rate; output frames at the clip's rate "
                         "are interpolated between simulated ones")
-    max_offset: float = Field(0.02, ge=0.0, le=0.25, description="farthest a particle may drift from its skinned "
+    max_offset: float = Field(0.01, ge=0.0, le=0.25, description="farthest a particle may drift from its skinned "
                               "position, as a fraction of the character's height")
     prototypes: int = Field(25, ge=1, le=200)
     max_particles: int | None = Field(None, ge=1000, le=500_000)

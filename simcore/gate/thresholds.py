@@ -26,7 +26,7 @@ TEAR_RADII = 1.0
 # Refinement may change the enclosed volume by at most 3 % of the rest volume beyond what LBS already does.
 REFINE_VOLUME_ADDED = 0.03
 # Offset from LBS in character heights: the tether holds particles within options.refine.max_offset (default
-# 0.02); past 0.05 is worth a look, past the option's ceiling (0.25) something escaped the tether.
+# 0.01); past 0.05 is worth a look, past the option's ceiling (0.25) something escaped the tether.
 REFINE_OFFSET_WARN = 0.05
 REFINE_OFFSET_FAIL = 0.25
 

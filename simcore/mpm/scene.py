@@ -42,7 +42,7 @@ from simcore.skinning.lbs import linear_blend
 BOUND = 3  # wall band in nodes
 MARGIN_NODES = 4  # free nodes between the body's box and the wall band on each side
 CFL_WAVE = 0.4  # Δt ≤ CFL_WAVE · dx / P-wave speed
-CFL_DRIVE = 0.25  # Δt ≤ CFL_DRIVE · dx / fastest driver speed
+CFL_DRIVE = 0.5  # Δt ≤ CFL_DRIVE · dx / fastest driver speed (half a cell, as the particle velocity clamp)
 PAPER_FPS = 25.0  # the substeps option counts per 25 fps frame (PhysRig: 100 → Δt = 4e-4 s)
 MAX_SUBSTEPS = 2000
 # Driver speed limit in character heights per second: a sprinter's foot moves under 10 heights/s, a
