@@ -119,7 +119,7 @@ def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int
                      seed: int = 0, model_path: Path | None = None) -> tuple[Skeleton, dict]:
     """The best of `candidates` decoded skeletons (`learned_candidates`) by the quality score plus the model's own
     log-probability, and a report: each candidate's class and scores, the chosen one."""
-    shape = shape_context(vertices, faces, seed)
+    shape = shape_context(vertices, faces)
     pool = learned_candidates(vertices, faces, shape, max_joints=max_joints, candidates=candidates, seed=seed,
                               model_path=model_path)
     scores = [score_candidate(c.skeleton, shape) for c in pool]

@@ -1,13 +1,19 @@
-"""`auto`: pick one skeleton among the candidates of every method by the quality score (no ground truth)."""
+"""`auto`: pick one skeleton among the candidates of every method by the quality score (no ground truth).
+
+Candidates come in order of preference (the humanoid template, the geometric method, plain thinning, the learned
+model's samples): the first whose score is within MARGIN of the best one wins. On corpus `train` the score's
+small differences picked worse skeletons as often as better ones; a clear gap (a candidate with joints outside
+the body, stacked joints, bones across the body or a lopsided tree on a symmetric mesh) is what it reliably sees.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from simcore.skeleton.candidate_score import CandidateScore, ShapeContext, score_candidate
 from simcore.skeleton.candidates import Candidate
+
+MARGIN = 0.1  # of the quality score: a preferred candidate this close to the best one is kept
 
 
 @dataclass
@@ -38,16 +44,18 @@ def _best_per_method(candidates: list[Candidate], scores: list[CandidateScore]) 
     return best
 
 
-def select_candidate(candidates: list[Candidate], shape: ShapeContext) -> Selection:
-    """The candidate with the highest quality score (the first on ties: callers list their preferred method first)."""
+def select_candidate(candidates: list[Candidate], shape: ShapeContext, margin: float = MARGIN) -> Selection:
+    """The first of `candidates` (listed in order of preference) whose quality score is within `margin` of the best."""
     if not candidates:
         raise ValueError("no skeleton candidates to select from")
     scores = [score_candidate(c.skeleton, shape) for c in candidates]
-    chosen = int(np.argmax([s.total for s in scores]))
+    top = max(s.total for s in scores)
+    chosen = next(k for k, s in enumerate(scores) if s.total >= top - margin)
     best = _best_per_method(candidates, scores)
     winner, terms = candidates[chosen], scores[chosen]
     others = ", ".join(f"{m} {total:.3f}" for m, (k, total) in best.items() if k != chosen)
-    reason = (f"{winner.method} scored {terms.total:.3f} (inside {terms.inside:.2f}, reach {terms.reach:.3f}, "
-              f"medial gap {terms.medial_gap:.3f}, off medial {terms.off_medial:.3f}, asymmetry {terms.asymmetry:.3f}, "
-              f"stacked {terms.stacked:.2f})" + (f" ahead of {others}" if others else ""))
+    how = "the best score" if terms.total >= top else f"within {margin} of the best, and preferred"
+    reason = (f"{winner.method}: {how}, {terms.total:.3f} (inside {terms.inside:.2f}, medial gap {terms.medial_gap:.3f}, "
+              f"off medial {terms.off_medial:.3f}, asymmetry {terms.asymmetry:.3f}, stacked {terms.stacked:.2f})"
+              + (f"; others {others}" if others else ""))
     return Selection(winner, scores, reason)
