@@ -29,7 +29,8 @@ def _broker_options(settings: Settings) -> tuple[str, dict]:
         folder.mkdir(parents=True, exist_ok=True)
         (settings.broker_dir / "processed").mkdir(parents=True, exist_ok=True)
         return "filesystem://", {"data_folder_in": str(folder), "data_folder_out": str(folder),
-                                 "processed_folder": str(settings.broker_dir / "processed"), "store_processed": False}
+                                 "processed_folder": str(settings.broker_dir / "processed"), "store_processed": False,
+                                 "control_folder": str(settings.broker_dir / "control")}  # else ./control in the cwd
     return settings.broker_url, {"visibility_timeout": settings.jobs.time_limit + 300}
 
 
