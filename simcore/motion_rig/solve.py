@@ -43,7 +43,7 @@ class MotionRigParams:
     max_bones: int = 64
     target_rmse: float = 0.0005
     min_gain: float = 0.15
-    search_counts: tuple[int, ...] = (8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
+    search_counts: tuple[int, ...] = (4, 8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
     search_frames: int = 25  # frames (evenly spread) the count search fits
     search_iterations: int = 5  # Dem Bones iterations while choosing the count
     iterations: int = 20  # Dem Bones iterations of the chosen count's fit

@@ -1,0 +1,61 @@
+"""Rigs from motion on small generated sequences: one connected tree that replays the frames."""
+
+import numpy as np
+import pytest
+
+from simcore.evaluation.motion_sequences import tube_sequence
+from simcore.motion.quality import skin_matrices
+from simcore.motion_rig.connected_solve import connected_transforms
+from simcore.motion_rig.free_bones import solve_from_clusters
+from simcore.motion_rig.solve import MotionRigParams, rig_from_motion
+from simcore.skinning.lbs import linear_blend
+
+
+@pytest.fixture(scope="module")
+def tube():
+    return tube_sequence(12, 8, 3, 12, seed=3)
+
+
+@pytest.fixture(scope="module")
+def rig(tube):
+    return rig_from_motion(tube.rest, tube.faces, tube.frames, tube.fps, MotionRigParams(bones=6, iterations=10))
+
+
+def test_skeleton_is_one_tree_with_sparse_normalised_weights(rig):
+    parents = rig.skeleton.parents
+    assert (parents < 0).sum() == 1 and parents[0] == -1
+    assert all(0 <= p < j for j, p in enumerate(parents.tolist()) if j)  # parents first, every joint reaches the root
+    w = rig.weights.toarray()
+    assert np.allclose(w.sum(axis=1), 1.0, atol=1e-5)
+    assert (np.count_nonzero(w, axis=1) <= 4).all()
+
+
+def test_exported_animation_replays_the_sequence_as_well_as_free_bones(tube, rig):
+    posed = linear_blend(tube.rest, rig.weights, skin_matrices(rig.skeleton, rig.animation))
+    diag = np.linalg.norm(np.ptp(tube.frames[0], axis=0))
+    replayed = np.sqrt(((posed - tube.frames) ** 2).sum(-1).mean()) / diag
+    assert replayed == pytest.approx(rig.report["rmse"], rel=1e-3, abs=1e-6)
+    assert rig.report["rmse"] <= 1.2 * rig.report["free_bones_rmse"]
+    assert rig.report["rmse"] < 0.01
+    assert len(rig.report["rmse_per_frame"]) == len(tube.frames)
+
+
+def test_tree_solve_keeps_each_child_joint_on_its_parent(tube):
+    free = solve_from_clusters(tube.rest, tube.frames, tube.faces, 3, max_influences=4, iterations=5)
+    parents = np.array([-1, 0, 1])
+    joints = np.array([[0.0, 0, 0], [0.33, 0, 0], [0.66, 0, 0]])
+    floating = np.array([True, False, False])
+    order = np.argsort(free.weights.T @ tube.rest[:, 0] / free.weights.sum(axis=0))  # bones along the tube
+    transforms, joints = connected_transforms(tube.rest, tube.frames, free.weights[:, order], parents, joints,
+                                              floating, free.transforms[:, order], sweeps=2, joint_regularisation=1e-3)
+    for child in (1, 2):
+        head = np.append(joints[child], 1.0)
+        by_parent = transforms[:, parents[child]] @ head
+        by_child = transforms[:, child] @ head
+        assert np.abs(by_parent - by_child).max() < 1e-9
+
+
+def test_automatic_count_stops_within_the_cap(tube):
+    rig = rig_from_motion(tube.rest, tube.faces, tube.frames, tube.fps, MotionRigParams(max_bones=8, search_iterations=3, iterations=5))
+    assert 2 <= rig.report["bones"] <= 8
+    assert rig.report["count_search"]
