@@ -24,7 +24,8 @@ STATUSES = ("queued", "running", "succeeded", "failed", "canceled")
 STAGE_BUCKETS = (0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0, 60.0, 120.0, 300.0, 600.0, 1800.0)
 STAGE_WINDOW = timedelta(hours=1)
 STAGE_WINDOW_JOBS = 5000  # bounds one scrape's work
-WORKER_SEEN_BEATS = 3  # a worker missing this many heartbeats is not counted
+WORKER_SEEN_BEATS = 3  # a worker missing this many heartbeats is not counted...
+WORKER_SEEN_MIN_SECONDS = 15.0  # ...nor sooner than this: a loaded database may delay one beat by seconds
 
 
 def stage_histogram(durations: list[float]) -> tuple[list[tuple[str, float]], float]:
@@ -38,7 +39,7 @@ class JobsCollector(Collector):
 
     def collect(self) -> Iterator[Metric]:
         t = utcnow()
-        seen_after = t - timedelta(seconds=WORKER_SEEN_BEATS * get_settings().jobs.heartbeat_seconds)
+        seen_after = t - timedelta(seconds=max(WORKER_SEEN_BEATS * get_settings().jobs.heartbeat_seconds, WORKER_SEEN_MIN_SECONDS))
         with session_scope() as session:
             by_status: dict[str, int] = {status: count for status, count in session.execute(
                 select(Job.status, func.count()).group_by(Job.status))}

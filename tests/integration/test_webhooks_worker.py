@@ -44,7 +44,7 @@ def test_an_event_outlives_a_killed_worker_and_a_receiver_that_was_down(scaled, 
             failed_once = wait_for(lambda: (j := client.get(f"/api/v1/jobs/{job_id}").json())["webhooks"]
                                    and j["webhooks"][0]["attempts"] and j, 90)
             assert failed_once["status"] == "succeeded" and failed_once["webhooks"][0]["attempts"][0]["status_code"] is None
-            assert "rigforge_workers 1.0" in client.get("/metrics").text
+            wait_for(lambda: "rigforge_workers 1.0" in client.get("/metrics").text, 30)
         finally:
             stop(first, signal.SIGKILL)
         with receiver(port) as hook:
