@@ -102,7 +102,7 @@ def test_health_and_readiness(client):
 def test_openapi_is_served_with_clean_operation_ids(client):
     spec = client.get("/openapi.json").json()
     ops = {op["operationId"] for path in spec["paths"].values() for op in path.values()}
-    assert {"jobs-submit_job", "jobs-get_job", "jobs-list_jobs", "jobs-cancel_job", "jobs-job_events"} <= ops
+    assert {"submitJob", "getJob", "listJobs", "cancelJob", "streamJobEvents"} <= ops
 
 
 def test_uploaded_bvh_clip_is_named_after_the_uploaded_file(client, auth, dev_assets):
