@@ -62,8 +62,8 @@ def eval_motion_rig(
     unknown = sorted(set(motions) - set(MOTIONS))
     if unknown:
         raise typer.BadParameter(f"unknown motion {unknown[0]!r}; choose from {', '.join(MOTIONS)}", param_hint="--motion")
-    console = Console()
     tty = sys.stderr.isatty()
+    console = Console(width=None if sys.stdout.isatty() else 160)  # a log keeps every column
     with console.status("rigging from motion…") as status:
         def on_row(name: str) -> None:
             if tty:
