@@ -344,12 +344,12 @@ def tether(
     prev: int,
     cur: int,
     dt: float,
-    radius: float,
+    radius: wp.array(dtype=float),
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     count: wp.array(dtype=wp.int32),
 ):
-    """Max-distance constraint: keep each particle within `radius` of its skinned (LBS) position.
+    """Max-distance constraint: keep each particle within its `radius` of its skinned (LBS) position.
 
     skin holds joint skinning matrices (column-vector 4x4) per substep boundary; `prev` and `cur` are the flat
     offsets of the substep's start and end sets. A particle past the radius is put back on the sphere and loses
@@ -364,9 +364,9 @@ def tether(
         before = before + weights[p][i] * wp.transform_point(skin[prev + joints[p][i]], r)
     d = x[p] - target
     length = wp.length(d)
-    if length > radius:
+    if length > radius[p]:
         normal = d / length
-        x[p] = target + normal * radius
+        x[p] = target + normal * radius[p]
         outward = wp.dot(v[p] - (target - before) / dt, normal)
         if outward > 0.0:
             v[p] = v[p] - normal * outward

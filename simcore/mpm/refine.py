@@ -88,11 +88,11 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
     mu = wp.array(scene.mu, dtype=float, device=dev)
     lam = wp.array(scene.lam, dtype=float, device=dev)
     tether = None
-    if scene.tether_radius > 0:
+    if scene.tether_radius.max() > 0:
         tether = Tether(wp.array(s.positions.astype(np.float32), dtype=wp.vec3, device=dev),
                         wp.array(scene.skin_joints, dtype=wp.vec4i, device=dev),
                         wp.array(scene.skin_weights, dtype=wp.vec4, device=dev),
-                        wp.zeros(1, dtype=wp.mat44, device=dev), 0, scene.tether_radius,
+                        wp.zeros(1, dtype=wp.mat44, device=dev), 0, wp.array(scene.tether_radius, dtype=float, device=dev),
                         wp.zeros(1, dtype=wp.int32, device=dev))
     setup_s = time.perf_counter() - started
 

@@ -14,8 +14,10 @@ from the LBS of these limited keys and added to the clip's own LBS. Within a key
 linearly.
 Δt = min(CFL bound of the P-wave speed, CFL bound of the fastest (limited) driver, the optional
 `substeps` floor), and each key interval takes as many equal substeps as that bound needs.
-Tether: every particle stays within `opts.max_offset` character heights of its skinned position
-(`kernels.tether`), so the refined surface is bounded by the character's size whatever the motion.
+Tether: every particle stays within `opts.max_offset` character heights of its skinned position, and within
+`TETHER_LIMB` of its limb's radius (`simcore.gate.measures.bone_radii` at its nearest vertex: a thin part may
+move less than a thick one before its volume changes), so the refined surface is bounded by the character's
+size whatever the motion (`kernels.tether`).
 """
 
 from __future__ import annotations
@@ -26,8 +28,10 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
 from simcore.errors import InvalidInput
+from simcore.gate.measures import bone_radii
 from simcore.geometry.referenced import referenced_mesh
 from simcore.motion.types import JointAnimation
 from simcore.mpm.drivers import DrivingPoints, animation_world_transforms, driver_positions, interpolate_transforms, leaf_tips, place_drivers
@@ -49,6 +53,7 @@ MAX_SUBSTEPS = 2000
 # retargeting pop (a joint flipping between two keys) far faster.
 DRIVER_SPEED_HEIGHTS = 8.0
 INFLUENCES = 4  # skinning influences per particle for the tether
+TETHER_LIMB = 0.25  # tether radius at most this share of the limb's radius
 
 
 def particle_budget(option: int | None, device: str) -> tuple[int, str]:
@@ -134,7 +139,7 @@ class CharacterScene:
     keys: (K,) key times (s), preroll keys first (negative times); world: (K, J, 4, 4) limited joint transforms;
     paths: (K, D, 3) limited driver positions per key; centres: (K, 3) grid centre per key;
     first_output: index of the key at clip time 0; inv_bind: (J, 4, 4);
-    skin_joints, skin_weights: (N, 4) particle skinning influences; tether_radius: m (0: no tether);
+    skin_joints, skin_weights: (N, 4) particle skinning influences; tether_radius: (N,) float32 m (all 0: no tether);
     height: character height (largest bind extent), m.
     """
 
@@ -154,7 +159,7 @@ class CharacterScene:
     inv_bind: np.ndarray
     skin_joints: np.ndarray
     skin_weights: np.ndarray
-    tether_radius: float
+    tether_radius: np.ndarray
     height: float
     info: dict[str, Any] = field(default_factory=dict)
 
@@ -177,7 +182,7 @@ class CharacterScene:
         dv = np.repeat(((self.paths[k + 1] - self.paths[k]) / h)[None], n, axis=0)
         origins = self.origin((1.0 - a[:-1, None]) * self.centres[k] + a[:-1, None] * self.centres[k + 1])
         skin = None
-        if self.tether_radius > 0:
+        if self.tether_radius.max() > 0:
             skin = interpolate_transforms(self.world[k], self.world[k + 1], a) @ self.inv_bind[None]
         return FramePlan(h / n, origins, pos[:-1].astype(np.float32), dv.astype(np.float32), skin)
 
@@ -224,6 +229,8 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
     stiffness = region_stiffness(particle_w, skeleton.names, opts.bone_stiffness) if opts.bone_stiffness else None
     mu, lam = particle_lame(prototype_weights(sample.positions, protos), protos, stiffness)
     skin_joints, skin_weights = top_influences(particle_w)
+    limb = bone_radii(skeleton, vertices[used], w_used)[cKDTree(vertices[used]).query(sample.positions)[1]]
+    tether = np.minimum(float(opts.max_offset) * height, TETHER_LIMB * limb).astype(np.float32)
 
     drivers = place_drivers(skeleton, opts.drivers, dx, tips=leaf_tips(skeleton, surface, w_used))
     raw = driver_positions(drivers, world)
@@ -245,7 +252,7 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
                            f"stiff for grid {grid}); use a softer preset or a coarser grid",
                            code="refine_too_stiff", field="refine.preset")
     scene = CharacterScene(sample, mu, lam, drivers, material.density, grid, dx, dt, times, world, paths, centres,
-                           pre, inv_bind, skin_joints, skin_weights, float(opts.max_offset) * height, height, info)
+                           pre, inv_bind, skin_joints, skin_weights, tether, height, info)
     info.update({
         "grid": grid, "dx_m": round(dx, 6), "particles": sample.count, "particle_counts": sample.counts,
         "driving_points": drivers.count, "drivers": opts.drivers, "preset": opts.preset,
@@ -255,7 +262,8 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
                         "drive_cfl": None if np.isinf(dt_drive) else dt_drive},
         "driver_speed_limit_m_s": round(limit, 4), "max_driver_speed_m_s": round(v_drive, 4),
         "max_driver_speed_unlimited_m_s": round(v_raw, 4), "driver_steps_capped": capped,
-        "height_m": round(height, 5), "tether_radius_m": round(scene.tether_radius, 6),
+        "height_m": round(height, 5), "tether_radius_m": {"max": round(float(tether.max()), 6),
+                                                          "median": round(float(np.median(tether)), 6)},
         "notes": list(sample.notes),
     })
     return scene

@@ -65,7 +65,7 @@ class Tether:
 
     rest: (N,) vec3 bind positions; joints, weights: (N,) vec4i / vec4 four skinning influences per particle;
     skin: ((S + 1) · J,) mat44 skinning matrices at the S + 1 substep boundaries of a frame interval;
-    radius: metres; count: (1,) int32 particles put back since the last read.
+    radius: (N,) float metres per particle; count: (1,) int32 particles put back since the last read.
     """
 
     rest: wp.array
@@ -73,7 +73,7 @@ class Tether:
     weights: wp.array
     skin: wp.array
     num_joints: int
-    radius: float
+    radius: wp.array
     count: wp.array
 
 
