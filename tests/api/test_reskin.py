@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
+from simcore.motion.gltf_clips import sample_node_worlds
 
 KEEP = json.dumps({"skeleton": "keep", "stages": ["skeleton", "skin", "export"]})
 
@@ -78,3 +81,45 @@ def test_a_kept_rigs_bind_frames_survive_the_edit(client, auth, dev_assets):
     order = [edited["names"].index(n) for n in rig.skeleton.names]
     dots = np.abs(np.sum(frames * np.asarray(edited["orientations"])[order], axis=1))
     assert dots.min() > 1 - 1e-5  # every joint keeps its studio bind frame
+
+
+def _joint_worlds(glb: bytes, names: list[str]) -> np.ndarray:
+    """(T, len(names), 4, 4) world matrices of the named joints at every key of the file's first clip."""
+    doc = GltfDocument.from_bytes(glb)
+    rig = read_rigged_asset(doc)
+    anim = doc.items("animations")[0]
+    times = np.unique(np.concatenate([doc.accessor(s["input"]) for s in anim["samplers"]]))
+    return sample_node_worlds(doc, 0, times, rig.joint_nodes[[rig.skeleton.names.index(n) for n in names]])
+
+
+def test_a_reskin_replays_the_source_jobs_clip(client, auth, dev_assets):
+    """What the dashboard's Re-skin sends for an animated job: its animated.glb as motion, renamed joints mapped
+    from their old names; the new rig plays the same clip, each joint turning as it did."""
+    fox = (dev_assets / "fox.glb").read_bytes()
+    walk = json.dumps({"skeleton": "keep", "motion": {"clip": "Walk"}, "stages": ["skeleton", "skin", "motion", "export"]})
+    first = client.get(f"/api/v1/jobs/{_post(client, auth, fox, walk).json()['id']}", headers=auth).json()
+    assert first["status"] == "succeeded", first
+    edited = json.loads(_artifact(client, auth, first, "skeleton.json"))
+    original = list(edited["names"])
+    old = original[5]
+    edited["names"][5] = "renamed_joint"
+    edited["positions"][3][1] += 0.02
+    options = json.dumps({"skeleton": "keep", "units": "m", "motion": {"joint_map": {old: "renamed_joint"}},
+                          "stages": ["skeleton", "skin", "motion", "export"]})
+    files = {"mesh": ("mesh.glb", _artifact(client, auth, first, "mesh.glb")),
+             "skeleton": ("edited.json", json.dumps(edited).encode()),
+             "motion": ("animated.glb", _artifact(client, auth, first, "animated.glb"))}
+    r = client.post("/api/v1/jobs", headers=auth, files=files, data={"options": options, "source_job": first["id"]})
+    assert r.status_code == 202, r.text
+    second = client.get(f"/api/v1/jobs/{r.json()['id']}", headers=auth).json()
+    assert second["status"] == "succeeded", second
+    before, after = (json.loads(_artifact(client, auth, job, "report.json"))["motion"] for job in (first, second))
+    assert after["status"] == "retargeted" and after["unmapped_target_joints"] == []
+    assert (after["clip"]["frames"], after["clip"]["fps"]) == (before["clip"]["frames"], before["clip"]["fps"])
+    assert after["joint_map"]["renamed_joint"] == old  # target joint → the clip's joint
+    ours = _joint_worlds(_artifact(client, auth, first, "animated.glb"), original)
+    theirs = _joint_worlds(_artifact(client, auth, second, "animated.glb"), edited["names"])
+    turn = np.einsum("tjab,tjac->tjbc", ours[..., :3, :3], theirs[..., :3, :3])  # R_firstᵀ R_second per joint
+    angle = np.degrees(np.arccos(np.clip((np.trace(turn, axis1=-2, axis2=-1) - 1) / 2, -1, 1)))
+    moved = {3, edited["parents"][3]}  # the moved joint re-aims its bone and its parent's
+    assert max(a for j, a in enumerate(angle.max(axis=0)) if j not in moved) < 0.05  # degrees

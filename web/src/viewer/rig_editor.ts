@@ -1,10 +1,11 @@
-// Skeleton editing on a finished job: move (transform gizmo or numbers), add, delete, re-parent and rename joints of
-// the job's skeleton.json, then "Re-skin" submits a new job with the edited skeleton (skeleton: keep, the job's
-// mesh.glb, source_job linking the two) and opens it. Positions are in the ingested mesh's frame (metres, +Y up),
-// which is the frame of the rigged model's root: the edit overlay hangs under it.
+// Skeleton editing on a finished job: pick a joint (click its sphere or the list), move it (transform gizmo or
+// numbers), add, delete, re-parent and rename joints of the job's skeleton.json, then "Re-skin" submits a new job
+// with the edited skeleton (skeleton: keep, the job's mesh.glb, source_job linking the two, the job's other options
+// and its baked clip) and opens it. Positions are in the ingested mesh's frame (metres, +Y up), which is the frame of
+// the rigged model's root: the edit overlay hangs under it.
 import * as THREE from "three";
 import { TransformControls } from "three/examples/jsm/controls/TransformControls.js";
-import { ApiError, api, toProblem, type Artifact } from "../api/client";
+import { ApiError, api, toProblem, type Artifact, type JobOptions, type JobOptionsInput } from "../api/client";
 import { getKey } from "../api/session";
 import { h, replace } from "../ui/dom";
 import type { SceneView } from "./scene_view";
@@ -30,6 +31,19 @@ export function deleteJoint(s: EditableSkeleton, j: number): EditableSkeleton {
   };
 }
 
+/** The re-skin job's options: the source job's skinning, refinement and export choices, on the edited skeleton as it
+ *  is (skeleton: keep; mesh.glb is metres, +Y up already; names as edited, so no naming preset). With the source's
+ *  animated.glb as motion (its clip already cut, resampled and put in place) only `loop` still applies, and joints
+ *  renamed in the editor are mapped from their old names, which the clip uses. */
+export function reskinOptions(source: JobOptions, renamed: Record<string, string>, withClip: boolean): JobOptionsInput {
+  return {
+    skeleton: "keep", units: "m", skinning: source.skinning, max_influences: source.max_influences,
+    smooth_iterations: source.smooth_iterations, exclude_joints: source.exclude_joints, refine: source.refine,
+    fbx: source.fbx, quality_gate: source.quality_gate,
+    motion: withClip ? { loop: source.motion?.loop ?? false, joint_map: renamed } : undefined,
+  };
+}
+
 /** Joints that may become `j`'s parent: any joint but itself and its descendants (no cycles). */
 export function parentChoices(s: EditableSkeleton, j: number): number[] {
   const below = new Set([j]);
@@ -45,12 +59,16 @@ export interface RigEditor { el: HTMLElement; close: () => void; dispose: () => 
 export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[]): RigEditor | null {
   const skeletonArt = artifacts.find((a) => a.name === "skeleton.json");
   const meshArt = artifacts.find((a) => a.name === "mesh.glb");
+  const clipArt = artifacts.find((a) => a.name === "animated.glb");
   if (!skeletonArt || !meshArt) return null;
   let skel: EditableSkeleton | null = null;
+  let origins: (string | null)[] = [];  // each joint's name in the job's skeleton.json (null: added here)
   let selected = 0;
   let group: THREE.Group | null = null;
   let gizmo: TransformControls | null = null;
   const spheres: THREE.Mesh[] = [];
+  const ray = new THREE.Raycaster();
+  let pressed: { x: number; y: number } | null = null;
   const lines = new THREE.LineSegments(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: "#bfe8ff", depthTest: false, transparent: true }));
   lines.renderOrder = 1000;
 
@@ -73,6 +91,7 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
     const doc = (await api.artifactJson(skeletonArt!.url)) as EditableSkeleton;
     skel = { names: [...doc.names], parents: [...doc.parents], positions: doc.positions.map((p) => [...p] as Vec3),
       orientations: doc.orientations ? doc.orientations.map((q) => [...q]) : null };
+    origins = [...doc.names];
     const model = view.models[0];
     if (!model) return;
     view.setClip(null);  // the bind pose the joints belong to
@@ -89,6 +108,8 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
     });
     gizmo.addEventListener("change", () => view.invalidate());
     view.scene.add(gizmo.getHelper());
+    view.canvas.addEventListener("pointerdown", onPointerDown);
+    view.canvas.addEventListener("pointerup", onPointerUp);
     openButton.textContent = "Stop editing";
     body.hidden = false;
     rebuild();
@@ -102,6 +123,22 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
     body.hidden = true;
     openButton.textContent = "Edit skeleton";
     view.setSkeletonVisible(true);
+  }
+
+  // A click (not a drag, not on the gizmo's handles) on a joint's sphere picks that joint.
+  function onPointerDown(e: PointerEvent): void { pressed = gizmo?.axis ? null : { x: e.offsetX, y: e.offsetY }; }
+  function onPointerUp(e: PointerEvent): void {
+    if (!skel || !pressed || Math.hypot(e.offsetX - pressed.x, e.offsetY - pressed.y) > 4) return;
+    const j = pickSphere(e.offsetX, e.offsetY);
+    if (j >= 0) select(j);
+  }
+
+  /** The joint whose sphere is nearest the camera under canvas point (x, y) in CSS px, else -1. */
+  function pickSphere(x: number, y: number): number {
+    const c = view.canvas;
+    ray.setFromCamera(new THREE.Vector2((x / c.clientWidth) * 2 - 1, -(y / c.clientHeight) * 2 + 1), view.camera);
+    const hit = ray.intersectObjects(spheres, false)[0];
+    return hit ? spheres.indexOf(hit.object as THREE.Mesh) : -1;
   }
 
   function rebuild(): void {
@@ -185,6 +222,7 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
     skel.parents.push(selected);
     skel.positions.push(p.map((v, i) => v + step[i]) as Vec3);
     skel.orientations?.push([...skel.orientations[selected]]);  // a new joint starts in its parent's frame
+    origins.push(null);
     rebuild();
     select(skel.names.length - 1);
   }
@@ -193,6 +231,7 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
     if (!skel || skel.parents[selected] < 0) return;
     const parent = skel.parents[selected];
     skel = deleteJoint(skel, selected);
+    origins = origins.filter((_, i) => i !== selected);
     rebuild();
     select(parent < selected ? parent : parent - 1);
   }
@@ -202,10 +241,14 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
     reskinButton.disabled = true;
     status.textContent = "submitting…";
     try {
+      const edited = skel;
+      const renamed = Object.fromEntries(origins.flatMap((o, i) => (o !== null && o !== edited.names[i] ? [[o, edited.names[i]]] : [])));
       const form = new FormData();
       form.append("mesh", new Blob([await api.artifactBytes(meshArt!.url)]), "mesh.glb");
       form.append("skeleton", new Blob([JSON.stringify(skel)], { type: "application/json" }), "edited-skeleton.json");
-      form.append("options", JSON.stringify({ skeleton: "keep", units: "m" }));  // mesh.glb is metres, +Y up already
+      if (clipArt) form.append("motion", new Blob([await api.artifactBytes(clipArt.url)]), "animated.glb");
+      const source = (await api.getJob(jobId)).options as JobOptions;  // the job as stored: every option filled in
+      form.append("options", JSON.stringify(reskinOptions(source, renamed, !!clipArt)));
       form.append("source_job", jobId);
       const key = getKey();
       const res = await fetch("/api/v1/jobs", { method: "POST", body: form, headers: key ? { Authorization: `Bearer ${key}` } : {} });
@@ -219,6 +262,8 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
   }
 
   function disposeScene(): void {
+    view.canvas.removeEventListener("pointerdown", onPointerDown);
+    view.canvas.removeEventListener("pointerup", onPointerUp);
     if (gizmo) { gizmo.detach(); view.scene.remove(gizmo.getHelper()); gizmo.dispose(); gizmo = null; }
     if (group) { group.parent?.remove(group); group = null; }
     for (const s of spheres.splice(0)) { s.geometry.dispose(); (s.material as THREE.Material).dispose(); }
