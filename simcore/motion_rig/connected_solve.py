@@ -68,9 +68,9 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
         return weights[on, b, None] * (_turned(rot[:, b], rest[on]) + trans[:, b, None])
 
     shares = [contribution(b) for b in range(count)]
-    fit = np.zeros_like(frames)
+    resid = frames.copy()  # frames minus the present fit
     for b in range(count):
-        fit[:, support[b]] += shares[b]
+        resid[:, support[b]] -= shares[b]
     subtrees = _subtrees(parents)
     below = np.zeros((count, count))
     for b, sub in enumerate(subtrees):
@@ -83,14 +83,14 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
         on = np.flatnonzero(share > 0)
         s_on = share[on]
         lever = rot[:, parents[b]] - rot[:, b]  # (T, 3, 3)
-        pull = np.tensordot(s_on, frames[:, on] - fit[:, on], axes=(0, 1))  # (T, 3) share-weighted residual
+        pull = np.tensordot(s_on, resid[:, on], axes=(0, 1))  # (T, 3) share-weighted residual
         lhs = np.einsum("tki,tkj->ij", lever, lever) * float(s_on @ s_on) + joint_regularisation * steps * np.eye(3)
         rhs = np.einsum("tki,tk->i", lever, pull)
         step = np.linalg.solve(lhs, rhs)
         shift = lever @ step  # (T, 3)
         joints[b] += step
         trans[:, subtrees[b]] += shift[:, None]
-        fit[:, on] += s_on[None, :, None] * shift[:, None]
+        resid[:, on] -= s_on[None, :, None] * shift[:, None]
         for c in subtrees[b].tolist():
             shares[c] += weights[support[c], c, None] * shift[:, None]
 
@@ -99,7 +99,7 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
     def wanted_head(c: int) -> tuple[np.ndarray, float]:
         """(T, 3) where bone c's own vertices would put its joint under its present rotation, and their mass."""
         on, w = support[c], weights[support[c], c]
-        target = (frames[:, on] - fit[:, on] + shares[c]) / w[:, None]
+        target = (resid[:, on] + shares[c]) / w[:, None]
         mass = w * w
         heads = target - _turned(rot[:, c], rest[on] - joints[c])
         return np.tensordot(mass, heads, axes=(0, 1)) / mass.sum(), float(mass.sum())
@@ -109,10 +109,10 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
             carry(b)  # the parent moved since this bone's last update
             on, w = support[b], weights[support[b], b]
             own = contribution(b)
-            fit[:, on] += own - shares[b]
+            resid[:, on] -= own - shares[b]
             heads = [wanted_head(c) for c in kids[b]]  # children's joints ride on this bone: fit them too
             source = np.concatenate([rest[on], joints[kids[b]]])
-            target = np.concatenate([(frames[:, on] - fit[:, on] + own) / w[:, None],
+            target = np.concatenate([(resid[:, on] + own) / w[:, None],
                                      np.reshape([h for h, _ in heads], (len(heads), steps, 3)).swapaxes(0, 1)], axis=1)
             mass = np.concatenate([w * w, [m for _, m in heads]])
             if len(mass) == 0:
@@ -126,7 +126,7 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
             rot[:, b] = _procrustes(source - pivot, target - goal[:, None], mass)
             trans[:, b] = goal - np.einsum("tij,j->ti", rot[:, b], pivot)
             shares[b] = contribution(b)
-            fit[:, on] += shares[b] - own
+            resid[:, on] -= shares[b] - own
         for b in range(count):
             if not floating[b]:
                 _move_joint(b)

@@ -44,9 +44,9 @@ class MotionRigParams:
     target_rmse: float = 0.0005
     min_gain: float = 0.15
     search_counts: tuple[int, ...] = (4, 8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
-    search_frames: int = 25  # frames (evenly spread) the count search fits
-    search_iterations: int = 5  # Dem Bones iterations while choosing the count
-    iterations: int = 20  # Dem Bones iterations of the chosen count's fit
+    search_frames: int = 12  # frames (evenly spread) the count search fits
+    search_iterations: int = 3  # Dem Bones iterations while choosing the count
+    iterations: int = 12  # Dem Bones iterations of the chosen count's fit
     spread: int = 2  # 1-ring steps that make neighbouring bones' regions meet
     pivot_regularisation: float = 3e-4
     slide_mismatch: float = 0.01  # share of the diagonal: a bone pair that far from turning about a point slides
