@@ -23,11 +23,9 @@ from simcore.skeleton.axes import GLTF_UP
 from simcore.skeleton.chains import chain_start, segment_starts, sheet_chain
 from simcore.skeleton.edge_loops import edge_loops
 from simcore.skeleton.graph_simplify import branch_joints, branches, merge_junctions, path_length, prune_spurs
-from simcore.skeleton.hub_split import HubSplit, split_hubs
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.limb_rules import Ground, head_at_neck, leg_tip, with_limb_root
 from simcore.skeleton.medial import MedialForest, medial_forest
-from simcore.skeleton.mirror import mirror_plane
 from simcore.skeleton.section_centre import SECTION_LIMIT, centre_in_section
 from simcore.skeleton.symmetry import MirrorTwins, body_mirror, complete_twins, lopsided_branches, mirror_report, mirror_twins, symmetrize
 from simcore.skeleton.types import JointKind, Skeleton
@@ -54,7 +52,6 @@ class GeometricParams:
     close_drop: float = 0.25  # ...and kept when it shortens the medial axis by more than this share
     close_inside: float = 0.97  # ...with at least this share of it inside the lightly closed solid (no bridging)
     sheet_ratio: float = 0.02  # thinner than this × the length: a flat sheet, rigged as a principal-axis chain
-    tube_ratio: float = 2.0  # a junction-free body (tube) gets no segment shorter than this × its diameter
     root_push: float = 0.5  # a chain's root moves this share of its medial radius outwards, towards the end
     limb_exit: float = 1.5  # a limb gets a joint where its medial radius is down to this × its own (its hip)...
     limb_gap: float = 0.3  # ...unless a joint is within this × spacing of it already
@@ -67,12 +64,11 @@ class GeometricParams:
     head_widen: float = 1.3  # a mid-plane limb widening again to this × its thinnest is a head on a neck...
     neck_tol: float = 1.1  # ...pivoting where the neck is within this × its thinnest, nearest the head
     # Special-case rules, each switchable (simcore.skeleton.geometric_rules, `rigforge eval skeleton --ablate`).
-    restore_limbs: bool = True  # limbs that thinning erased get their medial line back (lost_limbs)
     twin_spurs: bool = True  # mirror-twin spurs of one junction are kept or pruned together
-    hub_split: bool = True  # a hub of four or more branches is split into junctions along the spine
     legs: bool = True  # legs standing on the floor: denser joints and a foot joint pulled in less
     limb_roots: bool = True  # a limb gets a joint where it leaves the trunk (its hip or shoulder)
     neck_pivot: bool = True  # a head on a neck gets its pivot where the neck is thinnest
+    restore_limbs: bool = True  # limbs that thinning erased get their medial line back (lost_limbs)
     mirror: bool = True  # on a mirror-symmetric mesh, twin joints are averaged into mirror images
     lopsided: bool = True  # ...a twinless branch whose mirror image is bare solid is dropped...
     midline_ends: bool = True  # ...and the tip joints of head and tail chains on the mirror plane are dropped
@@ -92,18 +88,9 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
     adjacency, pos, rad = forest.adjacency, forest.positions, forest.radius
     keys, brs = branches(adjacency, nodes)
     rep, merged, brs = merge_junctions(keys, brs, adjacency, pos, rad, params.merge_ratio)
-    split = HubSplit(rep, merged, brs, [])
-    if params.hub_split and len(brs) >= 4:  # a hub has at least four branches
-        split = split_hubs(rep, merged, brs, pos, rad, mirror_plane(pos[nodes]), len(pos))
-    rep, merged, brs = split.rep, split.merged, split.branches
-    if len(brs) == 1:  # a tube (no junction): like a sheet, it bends only where segments are longer than it is thick
-        spacing = max(spacing, params.tube_ratio * 2.0 * float(np.max(rad[brs[0].nodes])))
     base = len(graph.positions)
     slot: dict[int, int] = {}
-    used = {rep[k] for b in brs for k in (b.start, b.end)} | {k for link in split.links for k in link}
     for r in sorted(set(rep.values())):
-        if brs and r not in used:  # a hub that was split into junctions along the spine
-            continue
         slot[r] = len(graph.positions)
         graph.positions.append(merged[r])
         graph.body.append(body)
@@ -124,7 +111,6 @@ def _body_joints(forest: MedialForest, nodes: np.ndarray, params: GeometricParam
         graph.edges += list(zip(chain[:-1], chain[1:]))
         if leg is not None:
             graph.leg_tips.add(chain[0] if leg == 0 else chain[-1])
-    graph.edges += [(slot[a], slot[b]) for a, b in split.links]
     return len(graph.positions) - base
 
 

@@ -29,9 +29,8 @@ class Ground:
 
 
 def leaf_end(nodes: list[int], adjacency: list[list[int]]) -> int | None:
-    """0 or len(nodes) - 1: the end of the branch `nodes` that is a leaf, when exactly one is (a limb); else None.
-    Keys at or past len(adjacency) are junctions made by split_hubs, never leaves."""
-    leaves = [i for i in (0, len(nodes) - 1) if nodes[i] < len(adjacency) and len(adjacency[nodes[i]]) == 1]
+    """0 or len(nodes) - 1: the end of the branch `nodes` that is a leaf, when exactly one is (a limb); else None."""
+    leaves = [i for i in (0, len(nodes) - 1) if len(adjacency[nodes[i]]) == 1]
     return leaves[0] if len(leaves) == 1 else None
 
 
