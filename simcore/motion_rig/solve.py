@@ -79,41 +79,45 @@ def _error(rest: np.ndarray, frames: np.ndarray, fit: BoneFit) -> float:
     return float(np.sqrt((rmse(reconstruct(rest, fit.weights, fit.transforms), frames) ** 2).mean())) / diag
 
 
-def _free_fit(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, seams: np.ndarray, count: int,
-              params: MotionRigParams, iterations: int) -> BoneFit:
-    """Dem Bones on the surface with its seams closed; started from k-means clusters of the trajectories when
-    its own cluster splitting stalls short of `count` bones (the better of both fits is kept then)."""
-    surface = np.concatenate([faces, seams]) if len(seams) else faces
-    fit = solve_free_bones(rest, frames, surface, count, max_influences=params.max_influences, iterations=iterations)
-    if fit.num_bones >= count or count > len(rest):
-        return fit
-    clustered = solve_from_clusters(rest, frames, surface, count, max_influences=params.max_influences,
-                                    iterations=iterations)
-    return clustered if _error(rest, frames, clustered) < _error(rest, frames, fit) else fit
+def _free_fit(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, count: int, params: MotionRigParams,
+              iterations: int, start: str) -> BoneFit:
+    """Dem Bones from its own cluster splitting (`start` "split") or from k-means clusters of the vertex
+    trajectories ("kmeans")."""
+    solve = solve_free_bones if start == "split" else solve_from_clusters
+    return solve(rest, frames, surface, count, max_influences=params.max_influences, iterations=iterations)
 
 
-def choose_free_bones(rest: np.ndarray, frames: np.ndarray, faces: np.ndarray, seams: np.ndarray,
-                      params: MotionRigParams, progress: Progress) -> tuple[BoneFit, list[dict[str, float]]]:
-    """The free-bone fit at the chosen count (full iterations) and the (count, rmse) trail of the search."""
+def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, params: MotionRigParams,
+                      progress: Progress) -> tuple[BoneFit, list[dict[str, Any]]]:
+    """The free-bone fit at the chosen count (full iterations) and the trail of the search.
+
+    Each count is tried from both starts: Dem Bones' own splitting stalls or stays coarse on some sequences (a
+    smooth tube, a pose far from the bind pose), k-means of the trajectories on others; the better start is kept.
+    """
     counts = _counts(params)
-    trail: list[dict[str, float]] = []
-    chosen, before = counts[-1], None
+    trail: list[dict[str, Any]] = []
+    chosen, start, before = counts[-1], "split", None
     sample = frames[np.unique(np.linspace(0, len(frames) - 1, params.search_frames).astype(np.int64))]
     for i, count in enumerate(counts):
         if len(counts) == 1:
             break
-        fit = _free_fit(rest, sample, faces, seams, count, params, params.search_iterations)
-        error = _error(rest, sample, fit)
-        trail.append({"bones": fit.num_bones, "asked": count, "rmse": round(error, 6)})
+        tried = {how: _free_fit(rest, sample, surface, count, params, params.search_iterations, how)
+                 for how in ("split", "kmeans") if how == "split" or count <= len(rest)}
+        errors = {how: _error(rest, sample, fit) for how, fit in tried.items()}
+        best = min(errors, key=errors.__getitem__)
+        fit, error = tried[best], errors[best]
+        trail.append({"bones": fit.num_bones, "asked": count, "rmse": round(error, 6), "start": best})
         progress(0.5 * (i + 1) / len(counts))
         if before is not None and error > (1.0 - params.min_gain) * before[1]:
-            chosen = before[0]  # the curve has flattened: more bones fit detail, not joints
+            chosen, start = before[0], before[3]  # the curve has flattened: more bones fit detail, not joints
             break
         if error <= params.target_rmse or (before is not None and fit.num_bones <= before[2]):
-            chosen = count  # close enough, or Dem Bones splits off no more bones
+            chosen, start = count, best  # close enough, or no more bones to split off
             break
-        before = (count, error, fit.num_bones)
-    return _free_fit(rest, frames, faces, seams, chosen, params, params.iterations), trail
+        before = (count, error, fit.num_bones, best)
+    else:
+        start = before[3] if before is not None else "split"
+    return _free_fit(rest, frames, surface, chosen, params, params.iterations, start), trail
 
 
 def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps: float,
@@ -127,10 +131,10 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     rest, frames = np.asarray(rest, np.float64), np.asarray(frames, np.float64)
     diag = float(np.linalg.norm(np.ptp(frames[0], axis=0)))
     seams = seam_triangles(frames, faces)
-    free, trail = choose_free_bones(rest, frames, faces, seams, params, progress)
+    surface = np.concatenate([faces, seams])  # Dem Bones and bone adjacency see one surface across seams
+    free, trail = choose_free_bones(rest, frames, surface, params, progress)
     free_seconds = time.perf_counter() - started
     progress(0.6)
-    surface = np.concatenate([faces, seams])
     pairs = bone_pairs(rest, surface, free.weights, free.transforms, spread=params.spread,
                        pivot_regularisation=params.pivot_regularisation)
     tree = bone_tree(rest, free.weights, pairs, params.slide_mismatch * diag)
