@@ -6,7 +6,9 @@ Config choices (why):
 - no result backend: results live in the database row, not in Celery.
 - soft/hard time limits per job; the Redis visibility timeout is above the hard limit so Redis never
   re-delivers a job that is still legitimately running.
-- filesystem:// (the embedded default) keeps the queue in files under the data directory: no server.
+- filesystem:// (the embedded default) keeps the queue in files under the data directory: no server. Its
+  transport is polled from the worker's event loop (worker.filesystem_transport), so a killed pool process
+  cannot wedge the worker.
 - two queues, `cpu` and `gpu` (worker.routing decides which a job goes to); `rigforge worker --queues` picks.
 """
 
@@ -50,6 +52,7 @@ def make_celery() -> Celery:
         task_soft_time_limit=settings.jobs.soft_time_limit,
         task_time_limit=settings.jobs.time_limit,
         broker_transport_options=options,
+        broker_transport="worker.filesystem_transport:Transport" if broker.startswith("filesystem") else None,
         broker_connection_retry_on_startup=True,
         worker_hijack_root_logger=False,
         worker_enable_remote_control=not broker.startswith("filesystem"),  # fanout needs a real broker

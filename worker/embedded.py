@@ -3,8 +3,8 @@
 A supervisor thread restarts the worker when it dies or stops consuming. Consuming is judged from the job
 rows (the one source of truth), so it catches any wedge, whatever its cause: a ready worker is stuck when
 jobs wait in `queued`, none runs under a live lease and none was claimed for `worker_stall_seconds` on end.
-Killing a prefork pool child on kombu's filesystem:// transport (what the OOM killer does) can leave the
-worker alive but consuming nothing; the restart is what recovers from it. The worker runs in its own
+It is the safety net: the known causes of such wedges after killed pool processes (billiard's shared job-pipe
+lock, SQLite locks inherited across fork) are fixed in worker.filesystem_transport and worker.fork_guard. The worker runs in its own
 process group, and the whole group is killed on stop, so no pool child outlives `serve`.
 """
 

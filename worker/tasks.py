@@ -19,6 +19,7 @@ app = make_celery()
 _reconciler: Reconciler | None = None
 _maintenance: Maintenance | None = None
 _pool_size = 1  # this worker's pool processes (its concurrency), known to the children it forks
+_inherited_pools: list[object] = []  # in a pool process: the main process's connection pools, forked with it
 
 
 @app.task(name=TASK_NAME, ignore_result=True)
@@ -35,9 +36,15 @@ def _configure_logging(loglevel: str | None = None, **_: object) -> None:
 
 
 @celeryd_after_setup.connect
-def _note_pool_size(instance: object, **_: object) -> None:
+def _setup_main_process(instance: object, **_: object) -> None:
+    """Before the pool starts: note its size, and fork its processes only between SQLite transactions."""
     global _pool_size
+    from api.db import get_engine
+    from worker.fork_guard import guard_forks
+
     _pool_size = int(getattr(instance, "concurrency", 1) or 1)
+    if get_engine().dialect.name == "sqlite":
+        guard_forks(get_engine())
 
 
 @worker_process_init.connect
@@ -48,7 +55,9 @@ def _init_pool_process(**_: object) -> None:
     from simcore.budgets import apply_memory_cap
 
     if get_engine.cache_info().currsize:  # the pooled connections forked with us are the main process's: two
-        get_engine().dispose(close=False)  # processes on one socket corrupt both, so drop them without closing
+        engine = get_engine()  # processes on one connection corrupt both, so this process gets a pool of its own
+        _inherited_pools.append(engine.pool)  # kept, never closed: closing a forked SQLite handle or socket acts
+        engine.pool = engine.pool.recreate()  # on the main process's database locks and sessions too
     apply_memory_cap(get_settings().budgets.memory_cap_bytes(_pool_size))
 
 
