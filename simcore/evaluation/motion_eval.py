@@ -8,6 +8,10 @@ For every rigged .glb/.gltf in DIR that carries animation clips (loader stress t
 - error: mean vertex distance per frame, in unit-cube units (divided by the rest mesh's largest extent),
   averaged over up to 60 evenly spaced frames; "artist" rows retarget onto the artist skeleton itself
   (a self-check that must be ~0).
+- stretch: over every frame of the clip, the lowest 1st and highest 99th percentile of edge length / bind
+  length (as the quality gate measures a job), for our rig and for the artist's rig playing the same clip;
+  `stretch_ratio` is our deviation from 1 over the artist's, the worse tail, and issue 25 bounds it by
+  STRETCH_BOUND on every character × clip. Every clip of a character is evaluated.
 Humanoids also get `mocap_cmu_01_01.bvh` retargeted at 30 fps and their soles' sliding speed while in
 contact, for our rig and (as a reference measured in the same run) the artist's rig.
 """
@@ -25,6 +29,7 @@ import scipy.sparse as sp
 
 from simcore.errors import SimcoreError
 from simcore.evaluation.assets import rigged_assets
+from simcore.gate.measures import deformation_series, lbs_blocks
 from simcore.io.bvh import parse_bvh
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset
@@ -40,6 +45,8 @@ from simcore.skinning.lbs import linear_blend
 EXCLUDED = {"recursive_skeletons"}  # a loader stress test of 84 skins, not a character
 MOCAP = "mocap_cmu_01_01.bvh"
 MAX_FRAMES = 60
+STRETCH_BOUND = 1.15  # our stretch deviation / the artist rig's on the same clip, at most (issue 25)
+MIN_DEVIATION = 0.01  # an artist rig that stretches less than 1 % is compared with 1 %: no ratio of two near-zeros
 
 
 @dataclass
@@ -58,8 +65,26 @@ class MotionRow:
     vertex_error_p95: float | None = None  # 95th percentile over vertices and frames
     mocap_sliding: float | None = None  # heights per second
     mocap_contact: float | None = None
+    stretch_low: float | None = None  # lowest per-frame 1st percentile of edge length / bind length
+    stretch_high: float | None = None  # highest per-frame 99th percentile
+    artist_stretch_low: float | None = None  # the same for the artist's rig playing the same clip
+    artist_stretch_high: float | None = None
     seconds: float = 0.0
     error: str | None = None
+
+    @property
+    def stretch_ratio(self) -> float | None:
+        """Our deviation from rest length over the artist rig's on the same clip, the worse of the two tails."""
+        if self.stretch_low is None or self.stretch_high is None or self.artist_stretch_low is None or self.artist_stretch_high is None:
+            return None
+        low = (1.0 - self.stretch_low) / max(1.0 - self.artist_stretch_low, MIN_DEVIATION)
+        high = (self.stretch_high - 1.0) / max(self.artist_stretch_high - 1.0, MIN_DEVIATION)
+        return float(max(low, high))
+
+    @property
+    def within_bound(self) -> bool | None:
+        ratio = self.stretch_ratio
+        return None if ratio is None else ratio <= STRETCH_BOUND
 
 
 @dataclass
@@ -72,9 +97,16 @@ class MotionEvaluation:
         vals = [getattr(r, key) for r in self.rows if r.target == target and getattr(r, key) is not None]
         return float(np.mean(vals)) if vals else None
 
+    def bound_counts(self) -> tuple[int, int]:
+        """(our character × clip rows within STRETCH_BOUND, rows measured)."""
+        judged = [r.within_bound for r in self.rows if r.target == "ours" and r.within_bound is not None]
+        return sum(judged), len(judged)
+
     def to_dict(self) -> dict[str, Any]:
         return {
-            "rows": [asdict(r) for r in self.rows], "skipped": self.skipped, "predictor": self.predictor,
+            "rows": [{**asdict(r), "stretch_ratio": r.stretch_ratio, "within_bound": r.within_bound} for r in self.rows],
+            "stretch_bound": STRETCH_BOUND, "within_bound": dict(zip(("within", "measured"), self.bound_counts(), strict=True)),
+            "skipped": self.skipped, "predictor": self.predictor,
             "mean": {t: {k: self.mean(t, k) for k in ("vertex_error", "vertex_error_p95", "mocap_sliding")} for t in ("ours", "artist")},
         }
 
@@ -104,15 +136,26 @@ def _frames(n: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, min(n, MAX_FRAMES)).astype(np.int64))
 
 
-def _clip_error(clip: MotionClip, vertices: np.ndarray, artist_w: sp.csr_matrix, target: Skeleton,
-                weights: sp.csr_matrix) -> tuple[float, float, Any]:
-    """(mean, p95) per-vertex distance in unit-cube units, and the retarget result."""
+def _stretch(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix, mats: np.ndarray) -> tuple[float, float]:
+    """(lowest 1st, highest 99th) per-frame percentile of edge stretch of LBS under mats (T, J, 4, 4)."""
+    series = deformation_series(vertices, faces, lbs_blocks(vertices, weights, mats))
+    return float(series.stretch_low.min()), float(series.stretch_high.max())
+
+
+def _clip_error(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artist_w: sp.csr_matrix, target: Skeleton,
+                weights: sp.csr_matrix, row: MotionRow) -> Any:
+    """Fill the row's vertex error (mean, p95 per-vertex distance in unit-cube units) and stretch figures, ours and
+    the artist's; returns the retarget result."""
     result = retarget(clip, target)
     keep = _frames(clip.animation.num_frames)
-    reference = linear_blend(vertices, artist_w, skin_matrices(clip.skeleton, clip.animation)[keep])
-    ours = linear_blend(vertices, weights, skin_matrices(target, result.animation)[keep])
+    artist_mats, our_mats = skin_matrices(clip.skeleton, clip.animation), skin_matrices(target, result.animation)
+    reference = linear_blend(vertices, artist_w, artist_mats[keep])
+    ours = linear_blend(vertices, weights, our_mats[keep])
     dist = np.linalg.norm(ours - reference, axis=2) / np.ptp(vertices, axis=0).max()
-    return float(dist.mean()), float(np.percentile(dist, 95)), result
+    row.vertex_error, row.vertex_error_p95 = float(dist.mean()), float(np.percentile(dist, 95))
+    row.stretch_low, row.stretch_high = _stretch(vertices, faces, weights, our_mats)
+    row.artist_stretch_low, row.artist_stretch_high = _stretch(vertices, faces, artist_w, artist_mats)
+    return result
 
 
 def _mocap_sliding(mocap: MotionClip | None, vertices: np.ndarray, target: Skeleton, weights: sp.csr_matrix) -> tuple[float | None, float | None]:
@@ -125,13 +168,13 @@ def _mocap_sliding(mocap: MotionClip | None, vertices: np.ndarray, target: Skele
 
 def evaluate_character(name: str, category: str, doc: GltfDocument, asset: RiggedAsset,
                        predictors: tuple[Callable, Callable] | None, mocap: MotionClip | None) -> list[MotionRow]:
-    """Rows for the artist rig (self-check) and for our predicted rig (when predictors exist)."""
-    clip = read_gltf_clip(doc, None, asset=asset)
-    vertices, clip = world_bind(doc, asset, clip)
+    """Rows for the artist rig (self-check) and for our predicted rig (when predictors exist), per clip."""
+    clips = [world_bind(doc, asset, read_gltf_clip(doc, k, asset=asset)) for k in range(len(doc.items("animations")))]
+    vertices = clips[0][0]
     artist_w = asset.weights
     humanoid = category == "humanoid"
     targets: list[tuple[str, Callable[[], tuple[Skeleton, sp.csr_matrix]]]] = [
-        ("artist", lambda: (clip.skeleton, artist_w)),
+        ("artist", lambda: (clips[0][1].skeleton, artist_w)),
     ]
     if predictors is not None:
         predict_skeleton, compute_weights = predictors
@@ -144,17 +187,23 @@ def evaluate_character(name: str, category: str, doc: GltfDocument, asset: Rigge
     rows = []
     for label, build in targets:
         started = time.perf_counter()
-        row = MotionRow(name, category, label, clip.animation.name, clip.animation.num_frames)
         try:
-            skel, weights = build()
-            row.vertex_error, row.vertex_error_p95, result = _clip_error(clip, vertices, artist_w, skel, weights)
-            row.joints, row.mapped, row.method = skel.num_joints, len(result.mapping), result.method
-            if humanoid:
-                row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, vertices, skel, weights)
+            skel, weights = build()  # once per rig: every clip plays on it
         except SimcoreError as exc:
-            row.error = f"{exc.code}: {exc}"
-        row.seconds = round(time.perf_counter() - started, 2)
-        rows.append(row)
+            rows.append(MotionRow(name, category, label, error=f"{exc.code}: {exc}"))
+            continue
+        for k, (_, clip) in enumerate(clips):
+            row = MotionRow(name, category, label, clip.animation.name, clip.animation.num_frames)
+            try:
+                result = _clip_error(clip, vertices, asset.faces, artist_w, skel, weights, row)
+                row.joints, row.mapped, row.method = skel.num_joints, len(result.mapping), result.method
+                if humanoid and k == 0:
+                    row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, vertices, skel, weights)
+            except SimcoreError as exc:
+                row.error = f"{exc.code}: {exc}"
+            row.seconds = round(time.perf_counter() - started, 2)
+            started = time.perf_counter()
+            rows.append(row)
     return rows
 
 

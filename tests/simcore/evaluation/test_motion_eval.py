@@ -1,16 +1,28 @@
-"""Motion evaluation: the self-check onto the artist's own rig reproduces the artist's animation."""
+"""Motion evaluation: the self-check onto the artist's own rig reproduces the artist's animation, every clip."""
 
 from __future__ import annotations
 
-from simcore.evaluation.motion_eval import evaluate_motion
+import pytest
+
+from simcore.evaluation.motion_eval import STRETCH_BOUND, MotionRow, evaluate_motion
 
 
-def test_artist_rig_self_check_is_exact(dev_assets):
+def test_artist_rig_self_check_is_exact_on_every_clip(dev_assets):
     report = evaluate_motion(dev_assets, use_predicted=False, only={"fox", "cesium_man"})
-    rows = {r.name: r for r in report.rows}
-    assert set(rows) == {"fox", "cesium_man"} and all(r.target == "artist" and r.error is None for r in rows.values())
-    fox_error, man_error = rows["fox"].vertex_error, rows["cesium_man"].vertex_error
-    assert fox_error is not None and man_error is not None
-    assert fox_error < 1e-6 and rows["fox"].mapped == rows["fox"].joints == 24
-    assert man_error < 2e-3  # its arm joints carry small keyed translations we keep rigid
-    assert rows["cesium_man"].mocap_sliding is not None and rows["fox"].mocap_sliding is None  # mocap: humanoids only
+    fox = [r for r in report.rows if r.name == "fox"]
+    man = [r for r in report.rows if r.name == "cesium_man"]
+    assert len(fox) == 3 and len({r.clip for r in fox}) == 3 and len(man) == 1  # the fox's Survey, Walk and Run
+    assert all(r.target == "artist" and r.error is None for r in fox + man)
+    assert all(r.vertex_error is not None and r.vertex_error < 1e-6 and r.mapped == r.joints == 24 for r in fox)
+    assert man[0].vertex_error is not None and man[0].vertex_error < 2e-3  # arm joints carry small keyed translations we keep rigid
+    assert man[0].mocap_sliding is not None and fox[0].mocap_sliding is None  # mocap: humanoids only
+    for r in fox:  # the artist's rig against itself: the same stretch, a ratio of 1
+        assert r.stretch_ratio == pytest.approx(1.0, abs=1e-6) and r.within_bound, r
+        assert r.stretch_low is not None and r.stretch_high is not None and r.stretch_low < 1.0 < r.stretch_high
+
+
+def test_the_stretch_ratio_is_our_deviation_over_the_artists_on_the_worse_tail():
+    row = MotionRow("a", "humanoid", "ours", stretch_low=0.5, stretch_high=1.2, artist_stretch_low=0.6, artist_stretch_high=1.4)
+    assert row.stretch_ratio == pytest.approx(0.5 / 0.4) and row.within_bound is (0.5 / 0.4 <= STRETCH_BOUND)
+    rigid = MotionRow("b", "other", "ours", stretch_low=0.995, stretch_high=1.004, artist_stretch_low=1.0, artist_stretch_high=1.0)
+    assert rigid.stretch_ratio == pytest.approx(0.5) and rigid.within_bound  # a rigid artist clip is compared with 1 %
