@@ -43,6 +43,7 @@ class MotionRigParams:
     max_bones: int = 64
     target_rmse: float = 0.0005
     min_gain: float = 0.15
+    kmeans_margin: float = 0.5  # k-means start kept when its search error is below this share of Dem Bones' own
     search_counts: tuple[int, ...] = (4, 8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
     search_frames: int = 12  # frames (evenly spread) the count search fits
     search_iterations: int = 3  # Dem Bones iterations while choosing the count
@@ -92,7 +93,8 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
     """The free-bone fit at the chosen count (full iterations) and the trail of the search.
 
     Each count is tried from both starts: Dem Bones' own splitting stalls or stays coarse on some sequences (a
-    smooth tube, a pose far from the bind pose), k-means of the trajectories on others; the better start is kept.
+    smooth tube, a pose far from the bind pose); k-means of the trajectories is taken only when clearly better
+    (its bones fit as well elsewhere but join into a worse tree).
     """
     counts = _counts(params)
     trail: list[dict[str, Any]] = []
@@ -104,7 +106,7 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
         tried = {how: _free_fit(rest, sample, surface, count, params, params.search_iterations, how)
                  for how in ("split", "kmeans") if how == "split" or count <= len(rest)}
         errors = {how: _error(rest, sample, fit) for how, fit in tried.items()}
-        best = min(errors, key=errors.__getitem__)
+        best = "kmeans" if errors.get("kmeans", np.inf) < params.kmeans_margin * errors["split"] else "split"
         fit, error = tried[best], errors[best]
         trail.append({"bones": fit.num_bones, "asked": count, "rmse": round(error, 6), "start": best})
         progress(0.5 * (i + 1) / len(counts))
