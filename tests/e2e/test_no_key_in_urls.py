@@ -28,14 +28,13 @@ def _finished_ingest_job(server, dev_assets) -> dict:
     return job
 
 
-def test_events_by_header_and_downloads_by_signed_link(page, dashboard_server, dev_assets):
-    job = _finished_ingest_job(dashboard_server, dev_assets)
-    key = dashboard_server.local_key
+def _open_as_queued(page, job: dict) -> list:
+    """Serve the page's first read of `job` as still queued, so it follows the job to its end; returns the requests made."""
     requests: list = []
     page.on("request", lambda r: requests.append(r))
     served_as_queued: list[str] = []
 
-    def first_read_as_queued(route) -> None:  # the page then follows the job's events to its end
+    def first_read_as_queued(route) -> None:
         if served_as_queued:
             route.continue_()
             return
@@ -45,11 +44,19 @@ def test_events_by_header_and_downloads_by_signed_link(page, dashboard_server, d
                                        "artifacts": [], "download_all_url": None}))
 
     page.route(f"**/api/v1/jobs/{job['id']}", first_read_as_queued)
-    sign_in(page, key)
     page.goto(f"/#/jobs/{job['id']}")
     page.wait_for_selector("#job-head .badge[data-status=succeeded]", timeout=60_000)
+    assert served_as_queued
+    return requests
+
+
+def test_events_by_header_and_downloads_by_signed_link(page, dashboard_server, dev_assets):
+    job = _finished_ingest_job(dashboard_server, dev_assets)
+    key = dashboard_server.local_key
+    sign_in(page, key)
+    requests = _open_as_queued(page, job)
     events = [r for r in requests if r.url.endswith(f"/api/v1/jobs/{job['id']}/events")]
-    assert served_as_queued and events and events[0].headers.get("authorization") == f"Bearer {key}"
+    assert events and events[0].headers.get("authorization") == f"Bearer {key}"
 
     link = page.get_attribute("a[aria-label='Download mesh.glb']", "href")
     assert "/api/v1/files/" in link and "sig=" in link
@@ -63,3 +70,13 @@ def test_events_by_header_and_downloads_by_signed_link(page, dashboard_server, d
     assert info.value.suggested_filename == f"rigforge-{job['id']}.zip"
     assert not [r.url for r in requests if key in r.url]
     assert not page.console_errors and not page.external_requests
+
+
+def test_a_blocked_event_stream_falls_back_to_polling(page, dashboard_server, dev_assets):
+    job = _finished_ingest_job(dashboard_server, dev_assets)
+    blocked: list[str] = []
+    page.route("**/events", lambda route: (blocked.append(route.request.url), route.abort()))
+    sign_in(page, dashboard_server.local_key)
+    requests = _open_as_queued(page, job)  # reached `succeeded` by polling the job
+    assert blocked and len([r for r in requests if r.url.endswith(f"/api/v1/jobs/{job['id']}")]) >= 2
+    assert page.get_attribute("#job-head [role=progressbar]", "aria-valuenow") == "100"
