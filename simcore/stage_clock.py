@@ -1,7 +1,9 @@
 """The time budget of one running stage.
 
 Checked wherever the stage reports progress or checks for cancel; in the main thread a SIGALRM timer also
-interrupts a stage that never checks (between Python bytecodes: a long native call ends first).
+interrupts a stage that never checks (between Python bytecodes: a long native call ends first). A SIGALRM
+timer already armed (e.g. pytest-timeout's) keeps its deadline and handler: it fires if it is due first, and is
+re-armed for its remaining time after the stage.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ class StageClock:
         self.stage, self.seconds = stage, seconds
         self.started = time.monotonic()
         self._previous: Any = None  # the SIGALRM handler before this stage's, as signal.signal returns it
+        self._previous_left = 0.0  # seconds the timer armed before this stage had left when it began (0: none)
         self._armed = False
 
     def error(self) -> StageTimeout:
@@ -33,13 +36,20 @@ class StageClock:
             raise self.error()
 
     def _alarm(self, signum: int, frame: FrameType | None) -> None:
-        raise self.error()
+        if time.monotonic() - self.started >= self.seconds:
+            raise self.error()
+        self._previous_left = 0.0  # the earlier timer was due first: it has fired
+        signal.setitimer(signal.ITIMER_REAL, self.seconds - (time.monotonic() - self.started))
+        if callable(self._previous):
+            self._previous(signum, frame)
 
     def __enter__(self) -> StageClock:
         self.started = time.monotonic()
         if self.seconds and threading.current_thread() is threading.main_thread():
+            self._previous_left = signal.getitimer(signal.ITIMER_REAL)[0]
             self._previous = signal.signal(signal.SIGALRM, self._alarm)
-            signal.setitimer(signal.ITIMER_REAL, self.seconds)
+            first = min(self.seconds, self._previous_left) if self._previous_left else self.seconds
+            signal.setitimer(signal.ITIMER_REAL, first)
             self._armed = True
         return self
 
@@ -47,4 +57,7 @@ class StageClock:
         if self._armed:
             signal.setitimer(signal.ITIMER_REAL, 0)
             signal.signal(signal.SIGALRM, signal.SIG_DFL if self._previous is None else self._previous)
+            if self._previous_left:
+                left = self._previous_left - (time.monotonic() - self.started)
+                signal.setitimer(signal.ITIMER_REAL, max(left, 1e-3))  # overdue: fire at once
             self._armed = False

@@ -63,12 +63,23 @@ def test_a_loop_that_never_checks_is_interrupted_in_the_main_thread_within_its_b
     assert time.monotonic() - started < 2.0
 
 
-def test_the_clock_leaves_no_alarm_armed_after_the_stage():
+def test_the_clock_restores_an_alarm_armed_before_the_stage_and_its_handler():
     import signal
 
-    with StageClock("motion", 5.0):
-        pass
-    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+    fired: list[int] = []
+    previous = signal.signal(signal.SIGALRM, lambda signum, frame: fired.append(signum))
+    left = signal.setitimer(signal.ITIMER_REAL, 30.0)[0]  # e.g. pytest-timeout's timer for this test
+    try:
+        with StageClock("motion", 5.0):
+            pass
+        assert 25.0 < signal.getitimer(signal.ITIMER_REAL)[0] <= 30.0 and not fired
+        with StageClock("motion", 5.0):
+            signal.setitimer(signal.ITIMER_REAL, 0.05)  # the earlier timer falls due inside the stage
+            time.sleep(0.2)
+        assert fired == [signal.SIGALRM]
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, left)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def test_a_job_that_cannot_fit_the_memory_budget_fails_before_its_heavy_stages_with_too_large(capsule, tmp_path):
