@@ -116,7 +116,7 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
     vp = s.vertex_particles
     keys = len(scene.keys)
     outputs = keys - scene.first_output
-    sim = np.empty((outputs, len(vertices), 3), np.float32)
+    sim = np.zeros((outputs, len(vertices), 3), np.float32)  # unsimulated vertices: filled from their neighbours below
     det_dev, clamps, tethered = [], [0, 0], 0
     sim_started = time.perf_counter()
     substeps_run = 0
