@@ -40,3 +40,12 @@ def new_bucket() -> str:
 def bucket_keys(bucket: str) -> list[str]:
     pages = s3_client().get_paginator("list_objects_v2").paginate(Bucket=bucket)
     return [item["Key"] for page in pages for item in page.get("Contents", [])]
+
+
+def drop_bucket(bucket: str) -> None:
+    """Delete a test bucket and what it holds (the server keeps objects in memory)."""
+    client = s3_client()
+    keys = bucket_keys(bucket)
+    for start in range(0, len(keys), 1000):
+        client.delete_objects(Bucket=bucket, Delete={"Objects": [{"Key": k} for k in keys[start:start + 1000]]})
+    client.delete_bucket(Bucket=bucket)

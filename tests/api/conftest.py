@@ -45,15 +45,18 @@ BACKENDS = ["local", "s3"]
 
 
 @pytest.fixture
-def storage_settings(storage_backend, monkeypatch) -> dict[str, str]:
+def storage_settings(storage_backend, monkeypatch) -> Iterator[dict[str, str]]:
     """RIGFORGE_ settings of the backend: none for local files, a fresh bucket on the test S3 server for s3."""
     if storage_backend == "local":
-        return {}
-    from tests.s3_server import CREDENTIALS, S3_ENDPOINT, new_bucket
+        yield {}
+        return
+    from tests.s3_server import CREDENTIALS, S3_ENDPOINT, drop_bucket, new_bucket
 
     for name, value in CREDENTIALS.items():
         monkeypatch.setenv(name, value)
-    return {"storage_url": f"s3://{new_bucket()}/rigforge", "s3_endpoint_url": S3_ENDPOINT}
+    bucket = new_bucket()
+    yield {"storage_url": f"s3://{bucket}/rigforge", "s3_endpoint_url": S3_ENDPOINT}
+    drop_bucket(bucket)
 
 
 @pytest.fixture

@@ -8,22 +8,25 @@ import io
 import os
 import tracemalloc
 import uuid
+from collections.abc import Iterator
 
 import httpx
 import pytest
 
 from api.storage_s3 import TRANSFER, S3Storage, _client
-from tests.s3_server import CREDENTIALS, S3_ENDPOINT, bucket_keys, new_bucket
+from tests.s3_server import CREDENTIALS, S3_ENDPOINT, bucket_keys, drop_bucket, new_bucket
 
 SIZE = 48 * 1024 * 1024  # six parts
 
 
 @pytest.fixture
-def storage(tmp_path, monkeypatch) -> S3Storage:
+def storage(tmp_path, monkeypatch) -> Iterator[S3Storage]:
     for name, value in CREDENTIALS.items():
         monkeypatch.setenv(name, value)
     client = _client(S3_ENDPOINT)
-    return S3Storage(new_bucket(), "prefix", client, client, tmp_path)
+    bucket = new_bucket()
+    yield S3Storage(bucket, "prefix", client, client, tmp_path)
+    drop_bucket(bucket)
 
 
 def test_a_large_upload_goes_in_parts_without_the_whole_file_in_memory(storage, tmp_path):
