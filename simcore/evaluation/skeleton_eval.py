@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from simcore.skeleton.predict import SkeletonPrediction
 
 PREDICTED_METHODS = ("auto", "geometric", "humanoid", "learned")
-CANDIDATE_METHODS = ("humanoid", "geometric", "thinning", "learned")  # the rows `all` takes from auto's candidates
+CANDIDATE_METHODS = ("humanoid", "geometric", "thinning")  # the rows `all` takes from auto's candidates
 METHODS = ("all", "voxel", *PREDICTED_METHODS)
 __all__ = ["AssetResult", "EvalCase", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "load_case",
            "read_categories", "resolve_methods"]
@@ -125,10 +125,10 @@ class SkeletonEvaluation:
 
 
 def resolve_methods(method: str) -> list[str]:
-    """The methods a `--method` value stands for ("all" = the voxel baseline and auto, with auto's candidates)."""
+    """The methods a `--method` value stands for ("all" = the voxel baseline, auto with its candidates, learned)."""
     if method not in METHODS:
         raise InvalidInput(f"unknown method {method!r}; use one of {', '.join(METHODS)}", code="invalid_option", field="method")
-    return ["voxel", "auto"] if method == "all" else [method]
+    return ["voxel", "auto", "learned"] if method == "all" else [method]
 
 
 @dataclass
@@ -179,21 +179,14 @@ def scores_of(case: EvalCase, skeleton: Skeleton) -> SkeletonScores:
 
 def _candidate_rows(name: str, category: str, case: EvalCase, prediction: SkeletonPrediction) -> list[AssetResult]:
     """One row per method of CANDIDATE_METHODS from auto's candidates: the skeleton that method gives alone."""
-    from simcore.skeleton.learned import best_of_n
-
     pool = prediction.candidates
-    totals = [c["total"] for c in prediction.report["auto"]["candidates"]]
-    shape_seconds = prediction.report["timings_s"].get("shape", 0.0)
     rows = []
     for method in CANDIDATE_METHODS:
         members = [k for k, c in enumerate(pool) if c.method == method]
         if not members:
-            note = prediction.report.get("learned_unavailable") if method == "learned" else "n/a: no biped fitted"
-            rows.append(AssetResult(name, category, method, None, 0.0, note=note))
+            rows.append(AssetResult(name, category, method, None, 0.0, note="n/a: no biped fitted"))
             continue
-        k = best_of_n(pool, totals) if method == "learned" else members[0]
-        seconds = sum(pool[m].seconds for m in members) + (shape_seconds if method == "learned" else 0.0)
-        rows.append(AssetResult(name, category, method, scores_of(case, pool[k].skeleton), seconds))
+        rows.append(AssetResult(name, category, method, scores_of(case, pool[members[0]].skeleton), pool[members[0]].seconds))
     return rows
 
 

@@ -52,10 +52,9 @@ def _check_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np
 
 def _auto(v: np.ndarray, f: np.ndarray, parts: list[SurfacePart], up: np.ndarray, report: dict[str, Any], *,
           max_joints: int, up_axis: str | None, forward_axis: str | None, params: GeometricParams) -> SkeletonPrediction:
-    """Every method's candidates, the one with the best quality score chosen (simcore.skeleton.select)."""
-    from simcore.model_weights import ModelUnavailable
-    from simcore.skeleton.learned import learned_candidates
-
+    """The humanoid, geometric and thinning candidates, the one with the best quality score chosen
+    (simcore.skeleton.select). The learned model's samples are not among them: on the corpus's val split they never
+    won the selection and cost most of its time (`rigforge eval skeleton --method all` reports them beside auto)."""
     started = time.perf_counter()
     shape = shape_context(v, f)
     timings = {"shape": round(time.perf_counter() - started, 3)}
@@ -64,10 +63,6 @@ def _auto(v: np.ndarray, f: np.ndarray, parts: list[SurfacePart], up: np.ndarray
     pool = [] if humanoid is None else [humanoid]
     pool.append(geometric_candidate(v, f, parts, max_joints=max_joints, up=up, params=params))
     pool.append(geometric_candidate(v, f, parts, max_joints=max_joints, up=up, params=plain_params(params), method="thinning"))
-    try:
-        pool += learned_candidates(v, f, shape, max_joints=max_joints)
-    except ModelUnavailable as exc:  # the other methods still give a skeleton; the report says why learned is missing
-        report["learned_unavailable"] = str(exc)
     for c in pool:
         timings[c.method] = round(timings.get(c.method, 0.0) + c.seconds, 3)
     selection = select_candidate(pool, shape)

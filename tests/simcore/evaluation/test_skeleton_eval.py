@@ -60,7 +60,7 @@ def test_cli_writes_json(small_dir, tmp_path) -> None:
 
 
 def test_methods_and_manifest_parsing(dev_assets, tmp_path) -> None:
-    assert resolve_methods("all") == ["voxel", "auto"]
+    assert resolve_methods("all") == ["voxel", "auto", "learned"]
     with pytest.raises(InvalidInput) as err:
         resolve_methods("magic")
     assert err.value.field == "method"

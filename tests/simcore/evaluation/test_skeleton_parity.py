@@ -18,7 +18,7 @@ from simcore.skeleton.types import Skeleton
 
 @pytest.mark.parametrize(("name", "method"), [
     ("rigged_simple.glb", "geometric"), ("cesium_man.glb", "geometric"), ("soldier.glb", "humanoid"),
-    pytest.param("fox.glb", "auto", marks=pytest.mark.slow),  # decodes 16 learned candidates twice
+    ("fox.glb", "auto"),
 ])
 def test_a_job_and_the_eval_give_the_same_skeleton(dev_assets, tmp_path, name, method):
     path = dev_assets / name
