@@ -21,7 +21,7 @@ def test_sequence_upload_is_rigged_from_its_motion(tmp_path):
     assert stages[0] == "ingest" and "skin" not in stages and "motion" not in stages and stages[-1] == "done"
     assert {"rigged.glb", "animated.glb", "animated.usdc", "skeleton.json", "report.json"} <= set(state.artifacts)
     report = json.loads((tmp_path / "out" / "report.json").read_text())
-    assert report["skeleton"]["method"] == "from_motion"
+    assert report["skeleton"]["method"] == "from_motion" and state.skeleton is not None
     assert report["motion_rig"]["bones"] == state.skeleton.num_joints == 4  # max_joints given: that many bones
     assert len(report["motion_rig"]["rmse_per_frame"]) == len(tube.frames)
     assert report["motion"]["clip"]["frames"] == len(tube.frames)

@@ -14,13 +14,19 @@ from simcore.motion_rig import upload
 from simcore.motion_rig.upload import read_sequence_upload, sequence_in_mesh_frame
 
 
+def exported(mesh: trimesh.Trimesh, fmt: str) -> bytes:
+    """The mesh as a file of format `fmt` (trimesh types export() for every format; these give text or bytes)."""
+    data = mesh.export(file_type=fmt)
+    assert isinstance(data, (bytes, str))
+    return data.encode() if isinstance(data, str) else data
+
+
 def frames_zip(frames: np.ndarray, faces: np.ndarray, fmt: str = "obj") -> bytes:
     """A .zip of one OBJ/PLY per frame, named so that plain sorting would misorder them (frame_10 < frame_2)."""
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w") as archive:
         for t, vertices in enumerate(frames):
-            mesh = trimesh.Trimesh(vertices, faces, process=False)
-            archive.writestr(f"seq/frame_{t}.{fmt}", mesh.export(file_type=fmt))
+            archive.writestr(f"seq/frame_{t}.{fmt}", exported(trimesh.Trimesh(vertices, faces, process=False), fmt))
     return buf.getvalue()
 
 
@@ -40,7 +46,7 @@ def test_zip_of_frames_reads_in_frame_order_in_the_mesh_frame(tube, fmt):
 
 
 def test_a_static_mesh_is_no_sequence_unless_one_is_required(tube):
-    glb = trimesh.Trimesh(tube.rest, tube.faces, process=False).export(file_type="glb")
+    glb = exported(trimesh.Trimesh(tube.rest, tube.faces, process=False), "glb")
     assert read_sequence_upload(glb, "glb") is None
     with pytest.raises(InvalidInput) as err:
         read_sequence_upload(glb, "glb", required=True)
@@ -54,7 +60,7 @@ def test_frames_must_keep_one_topology(tube):
         for name in src.namelist():
             dst.writestr(name, src.read(name))
         extra = trimesh.Trimesh(tube.rest, tube.faces[:-2], process=False)
-        dst.writestr("seq/frame_99.obj", extra.export(file_type="obj"))
+        dst.writestr("seq/frame_99.obj", exported(extra, "obj"))
     with pytest.raises(InvalidInput) as err:
         read_sequence_upload(buf.getvalue(), "zip")
     assert err.value.code == "sequence_topology_mismatch"

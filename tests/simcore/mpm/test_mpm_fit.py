@@ -44,6 +44,7 @@ def test_prototype_mixing_is_differentiable_in_the_geometry():
     rng = np.random.default_rng(0)
     probe = torch.as_tensor(rng.normal(size=len(scene.x0)))
     (probe * fit.particle_E(theta, geometry)).sum().backward()
+    assert geometry["centres"].grad is not None
     grad = geometry["centres"].grad.numpy()
     assert np.abs(grad).max() > 0
     eps = 1e-5
