@@ -122,6 +122,24 @@ def island_features(vertices: np.ndarray, label: np.ndarray, geo: np.ndarray, ca
     return pair, point
 
 
+def _nearest_segment(dist: np.ndarray, t: np.ndarray, owner: np.ndarray, joints: int, cand: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(V, K) straight distance from each vertex to its candidate joints' nearest segments, and the position along
+    that segment. dist, t: (V, S) per segment; owner: (S,) joint of each segment; cand: (V, K) joint ids. A joint
+    without segments reads as infinitely far (position 0); on equal distances the first segment counts."""
+    counts = np.bincount(owner, minlength=joints)
+    order = np.argsort(owner, kind="stable")
+    slot = np.arange(len(owner)) - (np.cumsum(counts) - counts)[owner[order]]
+    table = np.full((joints, max(int(counts.max()), 1)), len(owner))  # padding: the extra column below
+    table[owner[order], slot] = order
+    segs = table[cand]  # (V, K, M) segment ids of each candidate joint
+    rows = np.arange(len(dist))[:, None, None]
+    d = np.concatenate([dist, np.full((len(dist), 1), np.inf)], axis=1)[rows, segs]
+    along = np.concatenate([t, np.zeros((len(t), 1))], axis=1)[rows, segs]
+    best = np.argmin(d, axis=2)[..., None]
+    return np.take_along_axis(d, best, axis=2)[..., 0], np.take_along_axis(along, best, axis=2)[..., 0]
+
+
 def skin_inputs(
     vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, *, candidates: int = CANDIDATES,
     progress: Callable[[float], None] = lambda fraction: None,
@@ -137,15 +155,7 @@ def skin_inputs(
     k = min(candidates, j)
     cand = np.argsort(geo, axis=1, kind="stable")[:, :k]
     g = np.take_along_axis(geo, cand, axis=1)
-    # Straight distance and position along the segment of each candidate joint (its nearest segment).
-    euclid = np.full((len(v), j), np.inf)
-    along = np.zeros((len(v), j))
-    for s, owner in enumerate(segments.owner):
-        closer = dist[:, s] < euclid[:, owner]
-        euclid[closer, owner] = dist[closer, s]
-        along[closer, owner] = t[closer, s]
-    e = np.take_along_axis(euclid, cand, axis=1)
-    a = np.take_along_axis(along, cand, axis=1)
+    e, a = _nearest_segment(dist, t, segments.owner, j, cand)
     prior = np.log(np.maximum(falloff_weights(g, DISTANCE_UNIT), 1e-12))
     prior -= prior.max(axis=1, keepdims=True)
     normals = trimesh.Trimesh(v, faces, process=False).vertex_normals
