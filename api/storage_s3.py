@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import uuid
 from collections.abc import Iterator
-from datetime import datetime
+from datetime import datetime, timedelta
 from pathlib import Path
 from typing import Any, BinaryIO, cast
 from urllib.parse import quote, urlsplit
@@ -121,7 +121,7 @@ class S3Storage(Storage):
 
     def uploads(self) -> Iterator[tuple[str, datetime]]:
         for item in self._listing(self._key("uploads", "")):
-            yield self._locator(item["Key"]), item["LastModified"]
+            yield self._locator(item["Key"]), _written(item)
 
     def job_outputs(self) -> Iterator[tuple[uuid.UUID, datetime]]:
         prefix = self._key("jobs", "")
@@ -131,5 +131,11 @@ class S3Storage(Storage):
                 job_id = uuid.UUID(item["Key"][len(prefix):].split("/", 1)[0])
             except ValueError:
                 continue
-            newest[job_id] = max(newest.get(job_id, item["LastModified"]), item["LastModified"])
+            newest[job_id] = max(newest.get(job_id, _written(item)), _written(item))
         yield from newest.items()
+
+
+def _written(item: dict) -> datetime:
+    """The latest time a listed object may have been written: S3's LastModified is rounded down to the second, so
+    an object one fraction of a second old could otherwise look a whole second old to the orphan sweep."""
+    return item["LastModified"] + timedelta(seconds=1)
