@@ -1,5 +1,5 @@
 """The dashboard never puts the API key in a URL: it follows a job's events with fetch and the Authorization header,
-and downloads by the signed links in the job's JSON (a fresh one asked for at each click)."""
+and downloads by the signed links in the job's JSON (a fresh one asked for when the rendered one is about to expire)."""
 
 from __future__ import annotations
 
@@ -68,6 +68,12 @@ def test_events_by_header_and_downloads_by_signed_link(page, dashboard_server, d
     with page.expect_download() as info:
         page.click("#download-all")
     assert info.value.suggested_filename == f"rigforge-{job['id']}.zip"
+    # A link that has expired while the page stayed open is replaced by a fresh one from the job.
+    page.eval_on_selector("a[aria-label='Download mesh.glb']", "a => { a.href = a.href.replace(/expires=\\d+/, 'expires=1'); }")
+    with page.expect_download() as info:
+        page.click("a[aria-label='Download mesh.glb']")
+    info.value.save_as(saved)
+    assert saved.read_bytes()[:4] == b"glTF"
     assert not [r.url for r in requests if key in r.url]
     assert not page.console_errors and not page.external_requests
 
