@@ -55,6 +55,18 @@ def sign_in(page, key: str) -> None:
     page.wait_for_selector("#signin-message >> text=Signed in as local")
 
 
+def block_events(page, pattern: str = "**/events*") -> list[str]:
+    """Abort the page's requests for job event streams; returns the URLs refused, filled as they come."""
+    blocked: list[str] = []
+
+    def block(route) -> None:
+        blocked.append(route.request.url)
+        route.abort()
+
+    page.route(pattern, block)
+    return blocked
+
+
 def drop_file(page, selector: str, path, name: str) -> None:
     """Drag-and-drop a real file onto a drop zone (a DataTransfer built in the page from the file's bytes)."""
     data = base64.b64encode(path.read_bytes()).decode()
@@ -331,13 +343,7 @@ def test_jobs_list_filters_pages_and_explains_failures(page, dashboard_server, d
 
 
 def test_progress_falls_back_to_polling_when_events_are_blocked(page, dashboard_server, dev_assets):
-    blocked: list[str] = []
-
-    def block(route) -> None:
-        blocked.append(route.request.url)
-        route.abort()
-
-    page.route("**/events*", block)
+    blocked = block_events(page)
     sign_in(page, dashboard_server.local_key)
     page.goto("/#/new")
     page.set_input_files("#mesh", str(dev_assets / "fox.glb"))

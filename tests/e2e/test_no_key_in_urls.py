@@ -10,7 +10,7 @@ import httpx
 import pytest
 
 from tests.e2e.conftest import ARTIFACTS
-from tests.e2e.test_dashboard import sign_in
+from tests.e2e.test_dashboard import block_events, sign_in
 
 pytestmark = pytest.mark.browser
 INGEST_ONLY = '{"stages": []}'
@@ -80,13 +80,7 @@ def test_events_by_header_and_downloads_by_signed_link(page, dashboard_server, d
 
 def test_a_blocked_event_stream_falls_back_to_polling(page, dashboard_server, dev_assets):
     job = _finished_ingest_job(dashboard_server, dev_assets)
-    blocked: list[str] = []
-
-    def block(route) -> None:
-        blocked.append(route.request.url)
-        route.abort()
-
-    page.route("**/events", block)
+    blocked = block_events(page)
     sign_in(page, dashboard_server.local_key)
     requests = _open_as_queued(page, job)  # reached `succeeded` by polling the job
     assert blocked and len([r for r in requests if r.url.endswith(f"/api/v1/jobs/{job['id']}")]) >= 2

@@ -10,9 +10,13 @@ import sys
 import time
 import uuid
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
+from fastapi.testclient import TestClient
+
+from tests.service_env import service_env
 
 PG_ADMIN = "postgresql://postgres@127.0.0.1:5432/postgres"
 REDIS_URL = "redis://127.0.0.1:6379/7"
@@ -73,3 +77,21 @@ def wait_for(predicate, timeout: float, interval: float = 0.1):  # noqa: ANN001,
             return value
         time.sleep(interval)
     raise AssertionError(f"condition not met within {timeout} s")
+
+
+@contextmanager
+def scaled_service(data: Path, pg_url: str, redis_url: str, key_name: str, **settings: str
+                   ) -> Iterator[tuple[TestClient, dict[str, str]]]:
+    """The API in-process on PostgreSQL + Redis with a shared data dir and `settings`: (a TestClient holding a new
+    key's bearer header, the RIGFORGE_ environment for worker processes)."""
+    with service_env(data, database_url=pg_url, broker_url=redis_url, **settings):
+        from api.app import create_app
+        from api.db import session_scope
+        from api.keys.service import create_key
+
+        with session_scope() as s:
+            secret = create_key(s, name=key_name)[1]
+        env = {k: v for k, v in os.environ.items() if k.startswith("RIGFORGE_")}
+        with TestClient(create_app()) as client:
+            client.headers["Authorization"] = f"Bearer {secret}"
+            yield client, env

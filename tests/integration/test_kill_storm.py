@@ -15,9 +15,8 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from tests.integration.conftest import start_worker, wait_for
+from tests.integration.conftest import scaled_service, start_worker, wait_for
 from tests.integration.test_postgres_redis import FAST_LEASE, job_status
-from tests.service_env import service_env
 from tests.worker.test_embedded_worker import children
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
@@ -29,17 +28,8 @@ STORM = {**FAST_LEASE, "jobs__max_attempts": "50", "jobs__requeue_after_seconds"
 @pytest.fixture
 def storm(tmp_path, pg_url, redis_url):
     """API in-process and the workers' environment: PostgreSQL, Redis, a shared data dir, the storm's settings."""
-    with service_env(tmp_path / "data", database_url=pg_url, broker_url=redis_url, **STORM):
-        from api.app import create_app
-        from api.db import session_scope
-        from api.keys.service import create_key
-
-        with session_scope() as s:
-            secret = create_key(s, name="storm")[1]
-        env = {k: v for k, v in os.environ.items() if k.startswith("RIGFORGE_")}
-        with TestClient(create_app()) as client:
-            client.headers["Authorization"] = f"Bearer {secret}"
-            yield client, env
+    with scaled_service(tmp_path / "data", pg_url, redis_url, "storm", **STORM) as service:
+        yield service
 
 
 def finished(client: TestClient, ids: list[str]) -> list[dict] | None:

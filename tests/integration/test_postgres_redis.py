@@ -6,10 +6,8 @@ import os
 import signal
 
 import pytest
-from fastapi.testclient import TestClient
 
-from tests.integration.conftest import start_worker, wait_for
-from tests.service_env import service_env
+from tests.integration.conftest import scaled_service, start_worker, wait_for
 from tests.worker.test_migrations import assert_no_drift
 
 pytestmark = pytest.mark.integration
@@ -23,18 +21,8 @@ def test_postgres_migrations_have_no_drift(pg_url):
 @pytest.fixture
 def scaled(tmp_path, pg_url, redis_url):
     """API in-process and env for workers: PostgreSQL database, Redis broker, shared data dir."""
-    overrides = {"database_url": pg_url, "broker_url": redis_url, **FAST_LEASE}
-    with service_env(tmp_path / "data", **overrides):
-        from api.app import create_app
-        from api.db import session_scope
-        from api.keys.service import create_key
-
-        with session_scope() as s:
-            secret = create_key(s, name="it")[1]
-        env = {k: v for k, v in os.environ.items() if k.startswith("RIGFORGE_")}
-        with TestClient(create_app()) as client:
-            client.headers["Authorization"] = f"Bearer {secret}"
-            yield client, env
+    with scaled_service(tmp_path / "data", pg_url, redis_url, "it", **FAST_LEASE) as service:
+        yield service
 
 
 def job_status(client, job_id):  # noqa: ANN001, ANN201
