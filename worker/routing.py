@@ -1,6 +1,7 @@
 """Which Celery queue a job goes to: `gpu` for work a GPU speeds up, when a worker consumes that queue; else `cpu`.
 
-Refinement (MLS-MPM in Warp, CUDA when present) and the learned models (torch) go to `gpu`. Whether any worker
+Refinement (MLS-MPM in Warp, CUDA when present) and the learned models (torch: skinning `auto`/`learned`, skeleton
+`learned`; skeleton `auto` weighs no learned candidates) go to `gpu`. Whether any worker
 consumes `gpu` is asked of the workers themselves (Celery's remote control, one broadcast answered within
 a second, remembered for PRESENCE_TTL seconds), so a deployment with CPU workers only never strands a job. A job sent
 to `gpu` whose worker then leaves waits in that queue until the reconciler re-sends it (requeue_after_seconds),
@@ -19,7 +20,7 @@ CPU_QUEUE, GPU_QUEUE = "cpu", "gpu"
 QUEUES = (CPU_QUEUE, GPU_QUEUE)
 PRESENCE_TTL = 30.0
 INSPECT_TIMEOUT = 1.0
-_LEARNED = {"auto", "learned"}
+_LEARNED_SKINNING = {"auto", "learned"}
 
 _lock = threading.Lock()
 _seen: tuple[float, bool] = (-PRESENCE_TTL, False)  # (monotonic time asked, a gpu consumer answered)
@@ -27,8 +28,8 @@ _seen: tuple[float, bool] = (-PRESENCE_TTL, False)  # (monotonic time asked, a g
 
 def wants_gpu(options: JobOptions) -> bool:
     """Refinement, or a skeleton/skinning method that runs a learned model."""
-    predicted = options.skeleton in _LEARNED and (options.stages is None or "skeleton" in options.stages)
-    skinned = options.skinning in _LEARNED and (options.stages is None or "skin" in options.stages)
+    predicted = options.skeleton == "learned" and (options.stages is None or "skeleton" in options.stages)
+    skinned = options.skinning in _LEARNED_SKINNING and (options.stages is None or "skin" in options.stages)
     return options.refine.enabled or predicted or skinned
 
 

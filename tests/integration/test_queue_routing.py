@@ -35,6 +35,8 @@ def test_wants_gpu_for_refinement_and_learned_models_only():
     assert wants_gpu(JobOptions())  # auto may run the learned models
     assert wants_gpu(JobOptions(skeleton="keep", skinning="geodesic", refine={"enabled": True}))
     assert not wants_gpu(JobOptions(skeleton="geometric", skinning="geodesic"))
+    assert not wants_gpu(JobOptions(skeleton="auto", skinning="heat"))  # auto's skeleton candidates are all geometric
+    assert wants_gpu(JobOptions(skeleton="learned", skinning="heat"))
     assert not wants_gpu(JobOptions(stages=[]))  # ingest only
 
 
