@@ -2,16 +2,17 @@
 
 Every delivery carries `webhook-id`, `webhook-timestamp` (Unix seconds) and `webhook-signature`:
 `v1,` + base64(HMAC-SHA256(secret, f"{id}.{timestamp}.{body}")), where the secret is the key's
-`whsec_<base64>` signing secret. Receivers verify with any Standard Webhooks library (or those three lines),
-and reject timestamps far from their clock to stop replays.
+`whsec_<base64>` signing secret. Signing is the scheme's reference library's; receivers verify with any Standard
+Webhooks library and reject timestamps far from their clock to stop replays.
 """
 
 from __future__ import annotations
 
 import base64
-import hashlib
-import hmac
 import secrets
+from datetime import UTC, datetime
+
+from standardwebhooks.webhooks import Webhook
 
 SECRET_PREFIX = "whsec_"
 
@@ -23,9 +24,7 @@ def new_secret() -> str:
 
 def signature(secret: str, msg_id: str, timestamp: int, body: bytes) -> str:
     """The `webhook-signature` value of one delivery."""
-    key = base64.b64decode(secret.removeprefix(SECRET_PREFIX))
-    digest = hmac.new(key, f"{msg_id}.{timestamp}.".encode() + body, hashlib.sha256).digest()
-    return "v1," + base64.b64encode(digest).decode()
+    return Webhook(secret).sign(msg_id, datetime.fromtimestamp(timestamp, UTC), body.decode())
 
 
 def signed_headers(secret: str, msg_id: str, timestamp: int, body: bytes) -> dict[str, str]:
