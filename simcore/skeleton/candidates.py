@@ -2,7 +2,8 @@
 
 Methods: `humanoid` (the Mixamo template fitted on the medial tree; none when no biped layout is found),
 `geometric` (medial thinning with the special-case rules of `simcore.skeleton.geometric_rules`), `thinning` (the
-same with every rule off) and `learned` (the skeleton-token model's decoded sequences, several per mesh).
+same with every rule off), which `auto` weighs; and `learned` (the skeleton-token model's decoded sequences, several
+per mesh), of which the `learned` method keeps the best.
 """
 
 from __future__ import annotations

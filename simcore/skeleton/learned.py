@@ -106,15 +106,6 @@ def learned_candidates(vertices: np.ndarray, faces: np.ndarray, shape: ShapeCont
     return out
 
 
-def best_of_n(pool: list[Candidate], totals: list[float]) -> int:
-    """Index of the learned candidate with the highest quality score `totals` plus LOG_PROB_WEIGHT × its
-    log-probability (the model's own confidence breaks near ties); candidates of other methods are passed over."""
-    ranking = [t + LOG_PROB_WEIGHT * c.log_prob if c.log_prob is not None else -np.inf for c, t in zip(pool, totals)]
-    if not np.isfinite(max(ranking, default=-np.inf)):
-        raise ValueError("no learned candidate to choose from")
-    return int(np.argmax(ranking))
-
-
 def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 64, candidates: int = CANDIDATES,
                      seed: int = 0, model_path: Path | None = None) -> tuple[Skeleton, dict]:
     """The best of `candidates` decoded skeletons (`learned_candidates`) by the quality score plus the model's own
@@ -123,7 +114,7 @@ def learned_skeleton(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int
     pool = learned_candidates(vertices, faces, shape, max_joints=max_joints, candidates=candidates, seed=seed,
                               model_path=model_path)
     scores = [score_candidate(c.skeleton, shape) for c in pool]
-    best = best_of_n(pool, [s.total for s in scores])
+    best = int(np.argmax([s.total + LOG_PROB_WEIGHT * (c.log_prob or 0.0) for c, s in zip(pool, scores)]))
     chosen = pool[best]
     report = {
         "chosen": best, "joints": chosen.skeleton.num_joints, "symmetric": shape.mirror is not None,
