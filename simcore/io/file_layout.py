@@ -2,7 +2,8 @@
 
 Our skeleton is one tree with parents first (Skeleton.file_order / file_parents remember the upload's skin
 order and hierarchy). The glTF writer lays joints, weights and animation out in the file's order and under the
-file's parents, so a re-skinned rig lists the same joints in the same order as the upload did.
+file's parents, so a re-skinned rig lists the same joints in the same order as the upload did. The USD writer keeps
+our parents-first order (UsdSkel wants it) and the file's roots.
 """
 
 from __future__ import annotations
@@ -31,6 +32,16 @@ def file_skeleton(skeleton: Skeleton) -> tuple[Skeleton, np.ndarray]:
     written = skeleton.reordered(order)
     assert written.file_parents is not None  # reordered() keeps the file layout checked above
     return replace(written, parents=written.file_parents), order
+
+
+def file_forest(skeleton: Skeleton) -> Skeleton:
+    """The joints in our parents-first order under the upload's parents (its extra roots kept as roots).
+
+    For writers whose format wants parents before children (UsdSkel): our order is parents-first for the joined
+    tree, so it stays so once the joining edges are dropped. Identity without a file layout."""
+    if skeleton.file_parents is None:
+        return skeleton
+    return replace(skeleton, parents=skeleton.file_parents.copy())
 
 
 def file_weights(weights: sp.spmatrix, order: np.ndarray) -> sp.csr_matrix:

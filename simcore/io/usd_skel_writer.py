@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
+from simcore.io.file_layout import file_animation, file_forest
 from simcore.io.gltf_rig import primitive_triangles
 from simcore.io.mesh_layout import MeshLayout, read_mesh_layout
 from simcore.io.skin_influences import Influences, top_influences
@@ -190,6 +191,10 @@ def write_usd_skel(
     from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 
     skeleton.validate()
+    written = file_forest(skeleton)  # a kept rig's extra roots stay roots (UsdSkel allows a forest)
+    if animation is not None:
+        animation = file_animation(skeleton, written, animation)
+    skeleton = written
     layout = read_mesh_layout(mesh_glb)
     w = sp.csr_matrix(weights)
     if w.shape != (len(layout.vertices), skeleton.num_joints):

@@ -8,6 +8,7 @@ import pytest
 
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset
+from simcore.io.usd_validate import validate_usd_file
 from simcore.motion.gltf_clips import sample_node_worlds
 from simcore.options import JobOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
@@ -61,3 +62,30 @@ def test_auto_mode_rigs_a_studio_file_with_any_skin_order(tmp_path, order):
     (tmp_path / "rig.glb").write_bytes(to_glb(studio_rig(order)))
     state = run_pipeline(PipelineInputs(tmp_path / "rig.glb", "glb"), JobOptions(), tmp_path / "out")
     assert {"rigged.glb", "rigged.usdc"} <= set(state.artifacts)
+
+
+def test_keep_mode_usd_keeps_the_upload_roots_and_plays_its_motion(tmp_path):
+    """UsdSkel wants parents before children but allows several roots: the prop root stays a root, and every
+    joint's world track matches the upload's clip."""
+    from pxr import Usd, UsdGeom, UsdSkel
+
+    source = to_glb(studio_rig(TWO_ROOTS, animated=True))
+    (tmp_path / "rig.glb").write_bytes(source)
+    inputs = PipelineInputs(tmp_path / "rig.glb", "glb", tmp_path / "rig.glb", "glb")
+    state = run_pipeline(inputs, JobOptions(skeleton="keep"), tmp_path / "out")
+    assert validate_usd_file(state.artifacts["animated.usdc"]).ok
+    stage = Usd.Stage.Open(str(state.artifacts["animated.usdc"]))
+    skel = UsdSkel.Skeleton(stage.GetPrimAtPath("/Character/Skeleton"))
+    paths = [str(p) for p in skel.GetJointsAttr().Get()]
+    assert "sword" in paths and "hips" in paths  # two roots, as uploaded
+    names = [str(n) for n in skel.GetJointNamesAttr().Get()]
+    query = UsdSkel.Cache().GetSkelQuery(skel)
+    fps = stage.GetTimeCodesPerSecond()
+    src = GltfDocument.from_bytes(source)
+    skin_names, _ = _skin_layout(src)
+    frames = np.array([0, 3, 6, 9])
+    expected = sample_node_worlds(src, 0, frames / fps, np.asarray(src.items("skins")[0]["joints"]))
+    for k, frame in enumerate(frames):
+        worlds = query.ComputeJointWorldTransforms(UsdGeom.XformCache(float(frame)))
+        got = np.array([np.array(worlds[names.index(n)]).T[:3, 3] for n in skin_names])
+        np.testing.assert_allclose(got, expected[k][:, :3, 3], atol=1e-4)
