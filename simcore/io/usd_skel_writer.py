@@ -191,10 +191,10 @@ def write_usd_skel(
     from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 
     skeleton.validate()
-    written = file_forest(skeleton)  # a kept rig's extra roots stay roots (UsdSkel allows a forest)
+    forest = file_forest(skeleton)  # a kept rig's extra roots stay roots (UsdSkel allows a forest)
     if animation is not None:
-        animation = file_animation(skeleton, written, animation)
-    skeleton = written
+        animation = file_animation(skeleton, forest, animation)
+    skeleton = forest
     layout = read_mesh_layout(mesh_glb)
     w = sp.csr_matrix(weights)
     if w.shape != (len(layout.vertices), skeleton.num_joints):
