@@ -6,7 +6,8 @@ of optimiser steps, in two protocols: pure fitting (every frame) and train/test 
 with the shared parameters frozen fit only the per-frame motion of the rest; chamfer on the rest).
 Defaults are sized for 2 CPU cores (grid 32, 3k particles, 5 iterations per phase); the flags scale to the
 paper's settings (e.g. --grid 100 --substeps 100 --material-iters 20 --velocity-iters 30 --particles 50000
-on a GPU). Ablations: --no-learn-mixing, --material-iters 0, --drivers virtual.
+on a GPU). Ablations: --no-learn-mixing, --material-iters 0 (no material phase), --drivers virtual,
+--drive velocity (the paper's open-loop integrated velocities instead of driving points aimed at per-frame anchors).
 
     rigforge fit ../shared/assets/dev/meshseq_horse.glb ../shared/assets/dev/meshseq_flamingo.glb --json out.json
 """
@@ -45,6 +46,7 @@ def fit(
     drivers: Annotated[str, typer.Option(help="skeleton (predicted on frame 0) or virtual (farthest-point joints)")] = "skeleton",
     joints: Annotated[int, typer.Option(help="virtual joints, or the predicted skeleton's joints at most")] = 24,
     learn_mixing: Annotated[bool, typer.Option(help="learn prototype centres, axes and radii with E")] = True,
+    drive: Annotated[str, typer.Option(help="anchored (driving points aimed at per-frame anchors) or velocity (open loop)")] = "anchored",
     cycles: Annotated[int, typer.Option(help="alternating cycles")] = 3,
     material_iters: Annotated[int, typer.Option(help="AdamW steps per material phase (paper: 20)")] = 5,
     velocity_iters: Annotated[int, typer.Option(help="SGD steps per frame per velocity phase (paper: 30)")] = 5,
@@ -65,12 +67,14 @@ def fit(
         raise typer.BadParameter("pure, train_test or both", param_hint="--protocol")
     if drivers not in ("skeleton", "virtual"):
         raise typer.BadParameter("skeleton or virtual", param_hint="--drivers")
+    if drive not in ("anchored", "velocity"):
+        raise typer.BadParameter("anchored or velocity", param_hint="--drive")
     torch.set_num_threads(1)
     console = Console()
     config = FitConfig(grid=grid, substeps=substeps, max_particles=particles, prototypes=prototypes,
                        virtual_joints=joints, max_joints=joints, cycles=cycles, material_iters=material_iters,
                        velocity_iters=velocity_iters, velocity_lr=velocity_lr, device=device, drivers=drivers,
-                       learn_mixing=learn_mixing)
+                       learn_mixing=learn_mixing, drive=drive)
     protocols = ("pure", "train_test") if protocol == "both" else (protocol,)
     result: dict = {}
     for path in sequences:

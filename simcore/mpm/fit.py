@@ -19,10 +19,18 @@ Pinocchio) with coarse geodesic skinning weights, and each joint gets 8 points a
 (`place_drivers` "bones"); with "virtual", `virtual_joints` centres by farthest-point sampling of the volume
 (the paper's "uniform sampling" initialisation), 8 points each on a cube. Initial velocity of a driving
 point per frame = mean displacement of the target vertices nearest it (the paper's neighbourhood average).
+Drive (`drive`): "velocity" integrates the fitted velocities into the driving points' positions (open loop, as
+the paper: an error in one interval's velocity stays in every later frame). "anchored" (default) closes the
+loop: at each frame start a driving point sits where the particles it is embedded in are, and its velocity over
+the interval is the one that reaches its anchor at the interval's end (`anchors`: its joint's rigid motion
+fitted to that target frame) plus a fitted correction in cells; the correction is what SGD fits, and an
+interval's error is corrected by the next one instead of accumulating. The material phase treats the
+feedback as fixed within an iteration (no gradient through the driving points' start positions).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -30,12 +38,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from simcore.mpm.anchors import driver_anchors, falloff_weights, joint_motions
 from simcore.mpm.drivers import CUBE
 from simcore.mpm.materials import PRESETS, Prototypes, farthest_points, lame, seed_prototypes
 from simcore.mpm.measures import chamfer, chamfer_grad
 from simcore.mpm.sampling import sample_volume
 
 NEIGHBOURS = 16  # target vertices averaged for a virtual joint's initial velocity
+EMBED = 8  # particles whose mean motion carries a driving point (anchored drive)
 LOG_E_SCALE = 4.0  # material parameter θ = LOG_E_SCALE · log(E / E_preset)
 
 
@@ -61,6 +71,7 @@ class FitConfig:
     drivers: str = "skeleton"  # "skeleton" (predicted on frame 0) or "virtual" (farthest-point centres)
     max_joints: int = 24  # skeleton drivers: joints of the predicted skeleton at most
     learn_mixing: bool = True  # material phase also learns prototype centres, axes and radii
+    drive: str = "anchored"  # "anchored" (closed loop on per-frame anchors) or "velocity" (open loop)
 
 
 @dataclass
@@ -85,6 +96,9 @@ class FitScene:
     nu: float
     joints: np.ndarray  # (M, 3) joint (or virtual joint) positions at frame 0
     joint_weights: np.ndarray | None = None  # (V, M) coarse skinning weights of the target vertices (skeleton drivers)
+    anchors: np.ndarray | None = None  # (T, D, 3) driving-point targets per frame (anchored drive)
+    driver_particles: np.ndarray | None = None  # (D, EMBED) particles each driving point is embedded in
+    joint_motion: tuple[np.ndarray, np.ndarray] | None = None  # per-frame joint rotations (T, M, 3, 3), translations (T, M, 3)
 
 
 @dataclass
@@ -112,23 +126,39 @@ def prepare_scene(targets: np.ndarray, faces: np.ndarray, fps: float, config: Fi
     protos = seed_prototypes(sample.positions, config.prototypes, material, sample.volume, seed=config.seed)
     joint_weights = None
     if driver_centres is None and config.drivers == "skeleton":
-        driver_centres, drivers0, joint_weights = skeleton_drivers(targets[0], faces, dx, config.max_joints)
+        driver_centres, drivers0, joint_weights, owners = skeleton_drivers(targets[0], faces, dx, config.max_joints)
+        anchor_weights = joint_weights
     else:
         if driver_centres is None:
             driver_centres = sample.positions[farthest_points(sample.positions, config.virtual_joints, config.seed + 1)]
-        drivers0 = (np.asarray(driver_centres)[:, None, :] + CUBE[None] * 0.5 * dx).reshape(-1, 3)
+        driver_centres = np.asarray(driver_centres, np.float64)
+        drivers0 = (driver_centres[:, None, :] + CUBE[None] * 0.5 * dx).reshape(-1, 3)
+        owners = np.repeat(np.arange(len(driver_centres)), len(CUBE))
+        anchor_weights = falloff_weights(targets[0], driver_centres)
     frame_dt = 1.0 / fps
     _, near = cKDTree(targets[0]).query(drivers0, k=min(NEIGHBOURS, targets.shape[1]))
     velocities = np.diff(targets, axis=0)[:, near].mean(axis=2) / dx  # (T-1, D, 3) cells per frame
+    rot, trans = joint_motions(targets, anchor_weights)
+    anchors = driver_anchors(rot, trans, drivers0, owners)
+    _, embedded = cKDTree(sample.positions).query(drivers0, k=min(EMBED, len(sample.positions)))
     return FitScene(targets, sample.positions, sample.vertex_particles, sample.particle_volume, material.density,
                     protos, drivers0, velocities,
                     0.5 * (lo + hi), dx, grid, config.substeps, frame_dt, material.nu,
-                    np.asarray(driver_centres, np.float64), joint_weights)
+                    np.asarray(driver_centres, np.float64), joint_weights, anchors,
+                    np.asarray(embedded, np.int64).reshape(len(drivers0), -1), (rot, trans))
 
 
-def skeleton_drivers(vertices: np.ndarray, faces: np.ndarray, dx: float, max_joints: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Predicted skeleton of a mesh frame (V, 3): (joint positions (M, 3), driving points (8M, 3) along the bone
-    cores, coarse skinning weights (V, M) dense)."""
+def driver_path(scene: FitScene, velocities: np.ndarray) -> FitScene:
+    """The scene with driving points that follow velocities (T-1, D, 3) in cells per frame, in both drives:
+    the open-loop velocities and the anchors they integrate to."""
+    steps = np.concatenate([np.zeros((1,) + velocities.shape[1:]), np.cumsum(velocities, axis=0)]) * scene.dx
+    return dataclasses.replace(scene, velocities=np.asarray(velocities, np.float64), anchors=scene.drivers0[None] + steps)
+
+
+def skeleton_drivers(vertices: np.ndarray, faces: np.ndarray, dx: float,
+                     max_joints: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Predicted skeleton of a mesh frame (V, 3): (joint positions (M, 3), driving points (D, 3) along the bone
+    cores, coarse skinning weights (V, M) dense, joint carrying each driving point (D,))."""
     from simcore.mpm.drivers import leaf_tips, place_drivers
     from simcore.skeleton.predict import predict_skeleton
     from simcore.skinning.predict import compute_weights
@@ -136,7 +166,7 @@ def skeleton_drivers(vertices: np.ndarray, faces: np.ndarray, dx: float, max_joi
     skeleton = predict_skeleton(vertices, faces, method="geometric", max_joints=max_joints).skeleton
     weights = compute_weights(vertices, faces, skeleton, method="geodesic").weights
     drivers = place_drivers(skeleton, "bones", dx, tips=leaf_tips(skeleton, vertices, weights))
-    return skeleton.positions.copy(), drivers.rest, np.asarray(weights.todense(), np.float64)
+    return skeleton.positions.copy(), drivers.rest, np.asarray(weights.todense(), np.float64), drivers.joints
 
 
 class PhysicsFit:
@@ -162,7 +192,13 @@ class PhysicsFit:
         # prototype geometry: centres in cells, axes as rotation vectors, log of Λ's diagonal
         self.geometry = {"centres": protos.centres / scene.dx, "rotvec": np.zeros((protos.count, 3)),
                          "log_inv_sq": np.log(protos.inv_sq_radii)}
-        self.velocities = scene.velocities.copy()
+        self.anchored = config.drive == "anchored"
+        if self.anchored and (scene.anchors is None or scene.driver_particles is None):
+            raise ValueError("the anchored drive needs the scene's anchors and driver particles")
+        # fitted driving quantity per interval, cells: the velocity per frame (open loop) or the correction of the
+        # interval's end anchor (anchored)
+        self.controls = np.zeros_like(scene.velocities) if self.anchored else scene.velocities.copy()
+        self.drive_list: list = []  # DeviceDrive per interval, rebuilt by `forward`
         self.set_materials(self.theta)
 
     # --- parameters → simulation inputs -----------------------------------------------------------------
@@ -198,22 +234,48 @@ class PhysicsFit:
         self.mu.assign(mu.astype(np.float32))
         self.lam.assign(lam.astype(np.float32))
 
-    def drives(self) -> list:
-        """DeviceDrive per frame interval from the current velocities (driver positions integrate them)."""
+    def driver_start(self, f: int, x: np.ndarray) -> np.ndarray:
+        """(D, 3) driving-point positions at the start of interval f; x: (N, 3) particles at that frame."""
+        sc = self.scene
+        if not self.anchored:
+            return sc.drivers0 + self.controls[:f].sum(axis=0) * sc.dx
+        assert sc.driver_particles is not None
+        embed = sc.driver_particles
+        return sc.drivers0 + x[embed].mean(axis=1) - sc.x0[embed].mean(axis=1)
+
+    def _drive(self, f: int, x: np.ndarray):  # noqa: ANN202 - a DeviceDrive
         from simcore.mpm.simulate import DeviceDrive, FramePlan
 
         sc, n = self.scene, self.scene.substeps
         dt = sc.frame_dt / n
-        start = sc.drivers0.copy()
-        out = []
+        start = self.driver_start(f, x)
+        if self.anchored:
+            assert sc.anchors is not None
+            v = (sc.anchors[f + 1] + self.controls[f] * sc.dx - start) / sc.frame_dt  # m/s
+        else:
+            v = self.controls[f] * sc.dx / sc.frame_dt
         k = (np.arange(n) / n)[:, None]
-        for f in range(len(self.velocities)):
-            v = self.velocities[f] * sc.dx / sc.frame_dt  # m/s
-            dp = start[None] + (np.arange(n) * dt)[:, None, None] * v[None]
-            origins = (1 - k) * sc.centres[f] + k * sc.centres[f + 1] - 0.5 * (sc.grid - 1) * sc.dx
-            plan = FramePlan(dt, origins, dp.astype(np.float32), np.repeat(v[None], n, axis=0).astype(np.float32))
-            out.append(DeviceDrive(plan, self.solver.device, requires_grad=True))
-            start = start + v * sc.frame_dt
+        dp = start[None] + (np.arange(n) * dt)[:, None, None] * v[None]
+        origins = (1 - k) * sc.centres[f] + k * sc.centres[f + 1] - 0.5 * (sc.grid - 1) * sc.dx
+        plan = FramePlan(dt, origins, dp.astype(np.float32), np.repeat(v[None], n, axis=0).astype(np.float32))
+        return DeviceDrive(plan, self.solver.device, requires_grad=True)
+
+    def forward(self, first: int = 0, last: int | None = None) -> list[np.ndarray]:
+        """Simulate intervals first..last (default: to the end) from the kept state at frame `first` (frame 0:
+        the rest state), building each interval's drive from the state at its start; returns each frame's end
+        positions (N, 3). Keeps the drives (`drive_list`) and frame checkpoints for backward."""
+        last = len(self.controls) - 1 if last is None else last
+        x = self.scene.x0 if first == 0 else self.rollout.checkpoints[first].x.numpy().astype(np.float64)
+        out = []
+        for f in range(first, last + 1):
+            drive = self._drive(f, x)
+            if f < len(self.drive_list):
+                self.drive_list[f] = drive
+            else:
+                self.drive_list.append(drive)
+            x = self.rollout.forward(self.start if f == 0 else None, self.drive_list, first=f, last=f)[0]
+            out.append(x)
+            x = x.astype(np.float64)
         return out
 
     # --- losses ------------------------------------------------------------------------------------------
@@ -230,7 +292,7 @@ class PhysicsFit:
 
     def simulate(self) -> np.ndarray:
         """(T, V, 3) float64 simulated vertex positions with the current parameters (frame 0 = targets[0])."""
-        xs = self.rollout.forward(self.start, self.drives())
+        xs = self.forward()
         vp = self.scene.vertex_particles
         return np.concatenate([self.scene.targets[:1], np.stack([x[vp] for x in xs]).astype(np.float64)])
 
@@ -249,8 +311,7 @@ class PhysicsFit:
         sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda i: max(1.0 - i / max(iters, 1), 0.0))
         total, best = 0.0, (np.inf, self.theta.copy(), dict(self.geometry))
         for _ in range(iters):
-            drives = self.drives()
-            xs = self.rollout.forward(self.start, drives)
+            xs = self.forward()
             grads, total = {}, 0.0
             for f, x in enumerate(xs):
                 loss, g = self._frame_loss(x, f + 1)
@@ -259,7 +320,7 @@ class PhysicsFit:
                 best = (total, self.theta.copy(), dict(self.geometry))
             self.mu.grad.zero_()
             self.lam.grad.zero_()
-            self.rollout.backward(drives, grads)
+            self.rollout.backward(self.drive_list, grads)
             nu = self.scene.nu
             d_e = self.mu.grad.numpy() / (2 * (1 + nu)) + self.lam.grad.numpy() * nu / ((1 + nu) * (1 - 2 * nu))
             opt.zero_grad()
@@ -276,24 +337,23 @@ class PhysicsFit:
 
     def velocity_phase(self, iters: int, lr: float, progress: Callable[[float], None] = lambda f: None,
                        first: int = 0) -> float:
-        """SGD on the driving velocities frame by frame from frame interval `first` (earlier ones stay fixed);
+        """SGD on the driving controls frame by frame from frame interval `first` (earlier ones stay fixed);
         returns the summed loss of the fitted intervals."""
-        frames = len(self.velocities)
-        self.rollout.forward(self.start, self.drives())  # checkpoints for every frame start
+        frames = len(self.controls)
+        self.forward()  # checkpoints for every frame start
         total = 0.0
         for f in range(first, frames):
             loss = 0.0
             for i in range(iters):
-                drives = self.drives()
-                x = self.rollout.forward(None, drives, first=f, last=f)[0]
+                x = self.forward(f, f)[0]
                 loss, g = self._frame_loss(x, f + 1)
                 if loss < self.config.loss_threshold * len(self.scene.vertex_particles):
                     break
-                self.rollout.backward(drives, {f: g}, first=f)
-                grad_cells = drives[f].dv.grad.numpy().sum(axis=0) * self.scene.dx / self.scene.frame_dt  # dL/d(cells/frame)
-                self.velocities[f] -= lr * (1.0 - i / iters) * np.nan_to_num(grad_cells)
-            drives = self.drives()
-            x = self.rollout.forward(None, drives, first=f, last=f)[0]  # refresh the next frame's checkpoint
+                self.rollout.backward(self.drive_list, {f: g}, first=f)
+                # dL/d(control): the interval's velocity moves by dx / frame_dt per cell of control in both drives
+                grad_cells = self.drive_list[f].dv.grad.numpy().sum(axis=0) * self.scene.dx / self.scene.frame_dt
+                self.controls[f] -= lr * (1.0 - i / iters) * np.nan_to_num(grad_cells)
+            x = self.forward(f, f)[0]  # refresh the next frame's checkpoint
             total += self._frame_loss(x, f + 1)[0]
             progress((f + 1) / frames)
         return total
@@ -309,14 +369,14 @@ def fit_physics(scene: FitScene, config: FitConfig, log: Callable[[str], None] =
     """Run the alternating scheme on a prepared scene.
 
     materials_from: a fit whose materials (E and prototype geometry) are copied and kept fixed, and whose
-    velocities seed the intervals it covered (the test part of the train/test protocol: only the velocities of
+    driving controls seed the intervals it covered (the test part of the train/test protocol: only the controls of
     intervals ≥ `first` are fitted). Returns the result and the fit (its parameters).
     """
     started = time.perf_counter()
     fit = PhysicsFit(scene, config)
     if materials_from is not None:
         fit.set_materials(materials_from.theta, materials_from.geometry)
-        fit.velocities[:len(materials_from.velocities)] = materials_from.velocities
+        fit.controls[:len(materials_from.controls)] = materials_from.controls
     init = per_frame_chamfer(fit.simulate(), scene.targets)
     losses = []
     for cycle in range(config.cycles):

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from simcore.mpm.fit import FitConfig, FitScene, PhysicsFit, fit_physics, per_frame_chamfer, prepare_scene
+from simcore.mpm.fit import FitConfig, FitScene, PhysicsFit, driver_path, fit_physics, per_frame_chamfer, prepare_scene
 from simcore.mpm.lbs_fit import fit_lbs
 
 
@@ -42,7 +42,8 @@ def pure_fit(scene: FitScene, config: FitConfig, log: Callable[[str], None]) -> 
     """Both methods fitted to every frame; chamfer on frames ≥ 1 (frame 0 is the input of both)."""
     physics, _ = fit_physics(scene, config, log)
     steps = optimiser_steps(config, len(scene.targets), materials=config.material_iters > 0)
-    lbs, _ = fit_lbs(scene.targets, scene.joints, steps, scale=scene.dx, seed=config.seed, init_weights=scene.joint_weights)
+    lbs, _ = fit_lbs(scene.targets, scene.joints, steps, scale=scene.dx, seed=config.seed, init_weights=scene.joint_weights,
+                     init_motion=scene.joint_motion)
     row = _row(physics.chamfer, per_frame_chamfer(lbs, scene.targets), slice(1, None))
     return {**row, "physics_init": _cd(physics.chamfer_init[1:]), "budget_steps": steps,
             "fitted_E_Pa": [round(float(e), 1) for e in physics.E], "phase_losses": [round(x, 5) for x in physics.losses],
@@ -54,15 +55,19 @@ def train_test(scene: FitScene, config: FitConfig, train_frames: int, log: Calla
     geometry; LBS: weights), fit only the per-frame motion (driving velocities; bone transforms) of the rest.
     Chamfer on the held-out frames."""
     first = train_frames - 1  # first held-out interval
-    train = dataclasses.replace(scene, targets=scene.targets[:train_frames], velocities=scene.velocities[:first])
+    motion = None if scene.joint_motion is None else (scene.joint_motion[0][:train_frames],
+                                                      scene.joint_motion[1][:train_frames])
+    train = dataclasses.replace(scene, targets=scene.targets[:train_frames], velocities=scene.velocities[:first],
+                                anchors=None if scene.anchors is None else scene.anchors[:train_frames],
+                                joint_motion=motion)
     _, trained = fit_physics(train, config, log)
     physics, _ = fit_physics(scene, config, log, materials_from=trained, first=first)
     train_steps = optimiser_steps(config, train_frames, materials=config.material_iters > 0)
     _, logits = fit_lbs(train.targets, scene.joints, train_steps, scale=scene.dx, seed=config.seed,
-                        init_weights=scene.joint_weights)
+                        init_weights=scene.joint_weights, init_motion=train.joint_motion)
     test_steps = optimiser_steps(config, len(scene.targets), first=first, materials=False)
     lbs, _ = fit_lbs(scene.targets, scene.joints, test_steps, scale=scene.dx, seed=config.seed, frozen_logits=logits,
-                     first=first)
+                     first=first, init_motion=scene.joint_motion)
     row = _row(physics.chamfer, per_frame_chamfer(lbs, scene.targets), slice(train_frames, None))
     return {**row, "train_frames": train_frames, "budget_steps": {"train": train_steps, "test": test_steps}}
 
@@ -108,10 +113,10 @@ def recover_materials(config: FitConfig, frames: int = 6, fps: float = 25.0, tru
     order = np.argsort(scene.protos.centres[:, 0])  # prototype nearest the driven end gets true_E[0]
     truth = np.empty(2)
     truth[order] = true_E
-    gen = PhysicsFit(dataclasses.replace(scene, velocities=velocity), config)
+    gen = PhysicsFit(driver_path(scene, velocity), config)
     gen.set_materials(gen.theta_of(truth))
     targets = gen.simulate()
-    fit_scene = dataclasses.replace(scene, targets=targets, velocities=velocity)
+    fit_scene = dataclasses.replace(driver_path(scene, velocity), targets=targets)
     log(f"synthetic: {len(scene.x0)} particles, true E {truth.round(1).tolist()}")
     result, _ = fit_physics(fit_scene, config, log)
     rel = np.abs(result.E - truth) / truth

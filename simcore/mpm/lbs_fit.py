@@ -39,13 +39,16 @@ def _chamfer_sq(a, b):
 
 def fit_lbs(targets: np.ndarray, centres: np.ndarray, steps: int, scale: float, lr: float = 0.01,
             seed: int = 0, init_weights: np.ndarray | None = None, frozen_logits: np.ndarray | None = None,
-            first: int = 0) -> tuple[np.ndarray, np.ndarray]:
+            first: int = 0, init_motion: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """LBS reconstruction of targets (T, V, 3) from its frame 0 with bones pivoting at centres (M, 3).
 
     steps: Adam iterations (the budget); scale: length unit of the loss (the physics fit's dx);
     init_weights: (V, M) coarse skinning weights to start from (default: a distance falloff);
     frozen_logits: (V, M) weight logits kept fixed (the test part of the train/test protocol), only the
-    per-frame transforms are fitted, on frames > `first`.
+    per-frame transforms are fitted, on frames > `first`;
+    init_motion: per-frame bone motions from frame 0 (rotations (T, M, 3, 3), translations (T, M, 3): x ↦ R x + t)
+    to start the transforms from (the physics fit's driving-point anchors come from the same motions); default:
+    no rotation and the mean displacement of the vertices nearest each bone's joint.
     Returns (T, V, 3) float64 frames and the (V, M) weight logits.
     """
     import torch
@@ -64,8 +67,15 @@ def fit_lbs(targets: np.ndarray, centres: np.ndarray, steps: int, scale: float, 
         logits = (-d2 / (2 * spread**2)).clone().requires_grad_(True)
     _, near = cKDTree(np.asarray(targets[0])).query(centres, k=min(NEIGHBOURS, targets.shape[1]))
     shift = (np.asarray(targets)[1:, near] - np.asarray(targets)[0, near][None]).mean(axis=2)  # (T-1, M, 3)
+    rot0 = np.zeros_like(shift)
+    if init_motion is not None:  # about joint c: R x + t = R (x − c) + c + (R c + t − c)
+        from scipy.spatial.transform import Rotation
+
+        r, t = (np.asarray(m, np.float64)[1:] for m in init_motion)
+        shift = np.einsum("tmab,mb->tma", r, centres) + t - np.asarray(centres)[None]
+        rot0 = Rotation.from_matrix(r.reshape(-1, 3, 3)).as_rotvec().reshape(shift.shape)
     trans = torch.as_tensor(shift).clone().requires_grad_(True)
-    rot = torch.zeros_like(trans).requires_grad_(True)
+    rot = torch.as_tensor(rot0).clone().requires_grad_(True)
     opt = torch.optim.Adam([trans, rot] + ([logits] if frozen_logits is None else []), lr=lr)
 
     def pose():  # noqa: ANN202 - (T-1, V, 3) tensor
