@@ -36,7 +36,8 @@ def upload_format(head: bytes, size: int, *, kind: str, field: str) -> str:
 
 def check_structure(path: Path, fmt: str, *, field: str) -> None:
     """Parse a glTF upload's container and JSON (a .zip packed into one GLB first; structure, bounds, no external
-    buffer URIs; Draco is left to the worker).
+    buffer URIs; Draco is left to the worker). A .zip that is a mesh sequence (per-frame OBJ/PLY files, a .usdz)
+    and USD are read by the worker's sequence reader (simcore.motion_rig.upload), which checks them.
 
     At most `max_parallel_parses` run at once, since a big .gltf costs several times its size in memory;
     a request that finds no free slot within PARSE_WAIT_SECONDS is answered 503 with Retry-After.
@@ -49,6 +50,10 @@ def check_structure(path: Path, fmt: str, *, field: str) -> None:
                       headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
     try:
         data = path.read_bytes()
+        from simcore.motion_rig.upload import is_sequence_archive  # imported on use (numpy)
+
+        if fmt == "zip" and is_sequence_archive(data):
+            return
         GltfDocument.from_bytes(glb_from_zip(data) if fmt == "zip" else data, decode_draco=False)
     except SimcoreError as exc:
         exc.field = field

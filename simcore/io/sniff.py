@@ -7,11 +7,12 @@ import struct
 
 from simcore.errors import InvalidInput, UnsupportedFormat
 
-MESH_FORMATS = ("glb", "gltf", "zip", "obj", "ply", "stl")  # zip: a .gltf with its .bin and images
+MESH_FORMATS = ("glb", "gltf", "zip", "obj", "ply", "stl", "usd")  # zip: a .gltf with its .bin and images
+# (or a mesh sequence: per-frame OBJ/PLY, a .usdz); usd: a mesh sequence (time-sampled points)
 MOTION_FORMATS = ("bvh", "glb", "gltf")
 MEDIA_TYPES = {
     "glb": "model/gltf-binary", "gltf": "model/gltf+json", "obj": "model/obj", "ply": "application/ply",
-    "stl": "model/stl", "bvh": "application/x-bvh", "fbx": "application/octet-stream", "zip": "application/zip",
+    "stl": "model/stl", "usd": "model/vnd.usd", "bvh": "application/x-bvh", "fbx": "application/octet-stream", "zip": "application/zip",
 }
 GLTF_KEYS = (b'"asset"', b'"accessors"', b'"bufferViews"', b'"buffers"', b'"meshes"', b'"nodes"', b'"scenes"')
 _OBJ_LINE = re.compile(rb"^\s*(v|vt|vn|f|o|g|s|usemtl|mtllib|#)(\s|$)")
@@ -27,7 +28,8 @@ def _looks_like_obj(head: bytes) -> bool:
 def sniff(head: bytes, size: int) -> str:
     """Format name of a file from its first bytes (`head`, ≥ 4 KiB when the file is that long) and size.
 
-    Returns one of glb, gltf, zip, obj, ply, stl, bvh, fbx; raises InvalidInput for anything else.
+    Returns one of glb, gltf, zip, obj, ply, stl, usd (.usda text or .usdc crate), bvh, fbx; raises InvalidInput
+    for anything else.
     """
     if size == 0:
         raise InvalidInput("the file is empty", code="empty_file")
@@ -37,6 +39,8 @@ def sniff(head: bytes, size: int) -> str:
         return "zip"
     if head.startswith(b"Kaydara FBX Binary") or head.lstrip().startswith(b"; FBX"):
         return "fbx"
+    if head[:8] == b"PXR-USDC" or head[:5] == b"#usda":
+        return "usd"
     if head[:4] == b"ply\n" or head[:5] == b"ply\r\n":
         return "ply"
     if head.lstrip()[:9].upper() == b"HIERARCHY":
@@ -52,7 +56,7 @@ def sniff(head: bytes, size: int) -> str:
         return "stl"
     if _looks_like_obj(head):
         return "obj"
-    raise InvalidInput("unrecognised file format (expected GLB, glTF, a .zip of a glTF, OBJ, PLY, STL or BVH)",
+    raise InvalidInput("unrecognised file format (expected GLB, glTF, a .zip of a glTF, OBJ, PLY, STL, USD or BVH)",
                        code="unknown_format")
 
 

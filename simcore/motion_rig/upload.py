@@ -1,4 +1,5 @@
-"""Mesh-sequence uploads: a glTF morph-target animation (no skin), or a .zip of per-frame OBJ/PLY files.
+"""Mesh-sequence uploads: a glTF morph-target animation (no skin), a .zip of per-frame OBJ/PLY files, or USD
+(.usd/.usda/.usdc, or a .usdz package) whose meshes have time-sampled points (simcore.io.usd_mesh_sequence).
 
 `read_sequence_upload` says whether an upload is a sequence and, when it is, which bytes are the bind mesh that
 ingest reads and the frames in the file's own frame; `sequence_in_mesh_frame` checks the frames against the
@@ -20,6 +21,7 @@ from simcore.io.gltf_morph_sequence import MeshSequence, read_morph_sequence
 MAX_FRAMES = 10_000
 MAX_SAMPLES = 20_000_000  # frames × vertices: the solver holds a few (T, V, 3) float64 arrays
 FRAME_SUFFIXES = {".obj": "obj", ".ply": "ply"}
+USD_SUFFIXES = (".usd", ".usda", ".usdc")
 
 
 @dataclass
@@ -57,6 +59,32 @@ def _frame_files(data: bytes) -> list[tuple[str, bytes, str]] | None:
     fmt = kinds.pop()
     assert fmt is not None
     return [(n, archive.read(n), fmt) for n in sorted(names, key=_natural_key)]
+
+
+def _is_usdz(data: bytes) -> bool:
+    """A .zip whose first member is a USD layer (a .usdz package)."""
+    from simcore.io.gltf_zip import _Archive
+
+    names = list(_Archive(data).files)
+    return bool(names) and names[0].lower().endswith(USD_SUFFIXES)
+
+
+def is_sequence_archive(data: bytes) -> bool:
+    """A .zip that is a mesh sequence (per-frame OBJ/PLY files, or a .usdz) rather than a zipped glTF: the
+    upload check leaves it to the worker's sequence reader."""
+    return _is_usdz(data) or _frame_files(data) is not None
+
+
+def _usd_upload(data: bytes, suffix: str, fps: float | None) -> SequenceUpload:
+    """A USD sequence; its first frame, as OBJ (+Y up, metres), is the bind mesh."""
+    from simcore.io.usd_mesh_sequence import obj_bytes, read_usd_sequence
+
+    sequence = read_usd_sequence(data, suffix, fps=fps, check_frames=check_frame_count, check_samples=check_samples)
+    if sequence is None:
+        raise InvalidInput("a USD upload must be a mesh sequence: no mesh of this file has time-sampled points "
+                           "(a skeletal USD animation is not read; export its meshes' points per frame)",
+                           code="no_mesh_sequence", field="mesh")
+    return SequenceUpload(obj_bytes(sequence.frames[0], sequence.faces), "obj", sequence)
 
 
 def _frames_from_files(files: list[tuple[str, bytes, str]], fps: float) -> MeshSequence:
@@ -107,7 +135,8 @@ def read_sequence_upload(data: bytes, fmt: str, fps: float | None = None, *,
     upload = _read_sequence_upload(data, fmt, fps)
     if upload is None and required:
         raise InvalidInput("skeleton 'from_motion' needs a mesh sequence: a glTF/GLB whose animation drives morph "
-                           "targets (and that has no skin), or a .zip of per-frame OBJ or PLY files",
+                           "targets (and that has no skin), a .zip of per-frame OBJ or PLY files, or USD with "
+                           "time-sampled points",
                            code="no_mesh_sequence", field="mesh")
     return upload
 
@@ -118,7 +147,11 @@ def _read_sequence_upload(data: bytes, fmt: str, fps: float | None) -> SequenceU
         if not _has_morph_animation(doc):
             return None
         return SequenceUpload(data, fmt, read_morph_sequence(doc, fps=fps, max_frames=MAX_FRAMES + 1))
+    if fmt == "usd":
+        return _usd_upload(data, ".usd", fps)
     if fmt == "zip":
+        if _is_usdz(data):
+            return _usd_upload(data, ".usdz", fps)
         files = _frame_files(data)
         if files is None:
             return None
