@@ -14,7 +14,7 @@ from simcore.geometry.mesh_stats import mesh_stats
 from simcore.geometry.parts import bulk_size, surface_parts
 from simcore.geometry.referenced import referenced_mesh
 from simcore.io.gltf_document import GltfDocument
-from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
+from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset, rig_rest_matrices
 from simcore.io.gltf_static import bake_static_glb, static_arrays
 from simcore.io.gltf_zip import glb_from_zip
 from simcore.io.obj_polygons import check_polygon_sizes
@@ -93,14 +93,12 @@ def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray)
     """The upload's own skin in our frame (rest pose), weights re-indexed to our vertex order."""
     from scipy.spatial import cKDTree
 
-    from simcore.io.gltf_static import skin_rest_matrices
-
     if not any("skin" in n for n in doc.items("nodes")):
         return None
     rig = read_rigged_asset(doc)
     world = doc.world_matrices()
     joints_world = conversion @ world[rig.joint_nodes]
-    rest_skin = skin_rest_matrices(doc, rig.skin_index, world)[rig.skeleton.file_order]  # in our joint order
+    rest_skin = rig_rest_matrices(doc, rig)  # in our joint order, every skin of the file
     rig_vertices = np.einsum("vj,jab->vab", rig.weights.toarray(), conversion @ rest_skin)
     rig_vertices = np.einsum("vab,vb->va", rig_vertices[:, :3, :3], rig.vertices) + rig_vertices[:, :3, 3]
     dist, index = cKDTree(rig_vertices).query(vertices)

@@ -1,9 +1,10 @@
 """Rigged-asset extraction from a GltfDocument: bind-pose mesh, skin skeleton and per-vertex weights.
 
-Conventions follow the glTF skinning model: vertices are the skinned primitives' POSITION in mesh
-space (meshes parented under a joint are moved there and follow that joint), joint bind positions are the
-translations of inverse(inverseBindMatrix). Joint parents are the nearest ancestor node that is also a
-joint of the same skin.
+Conventions follow the glTF skinning model: vertices are the skinned primitives' POSITION in bind space
+(meshes parented under a joint are moved there and follow that joint), joint bind positions are the
+translations of inverse(inverseBindMatrix). A file may bind its meshes with several skins (one per mesh, or
+one per part of the character); the rig is their union, expressed in the bind space of the skin covering the
+most vertices. Joint parents are the nearest ancestor node that is also a joint of any of those skins.
 """
 
 from __future__ import annotations
@@ -30,12 +31,15 @@ class RiggedAsset:
     vertices: (V, 3) float64 bind-space positions of the rig's skinned primitives and of the meshes rigidly
               parented under its joints, concatenated in node order.
     faces:    (F, 3) int64 triangles indexing `vertices`.
-    skeleton: the skin's joints (bind positions, parents, node names).
+    skeleton: the skins' joints (bind positions, parents, node names).
     weights:  (V, J) float32 CSR matrix, rows normalised to 1 where any weight exists.
     joint_nodes: (J,) glTF node index of each joint.
-    bind_matrices: (J, 4, 4) float64 inverse of each inverse bind matrix (joint's bind transform).
-    skin_index: the glTF skin read.
-    Joints are in the skeleton's order (parents first, one root); skeleton.file_order maps them to the skin's.
+    bind_matrices: (J, 4, 4) float64 each joint's bind transform (inverse of its inverse bind matrix) in the
+              reference skin's bind space.
+    skin_index: the reference skin (the one whose meshes hold the most vertices).
+    skins: every skin read, the reference first.
+    Joints are in the skeleton's order (parents first, one root); skeleton.file_order maps them to the merged
+    joint list (the reference skin's `joints` in its order, then each further skin's joints not already listed).
     """
 
     vertices: np.ndarray
@@ -45,6 +49,7 @@ class RiggedAsset:
     joint_nodes: np.ndarray
     bind_matrices: np.ndarray
     skin_index: int = 0
+    skins: tuple[int, ...] = ()
 
 
 def primitive_triangles(doc: GltfDocument, prim: dict, vertex_count: int) -> np.ndarray:
@@ -81,26 +86,145 @@ def check_finite_weights(weights: np.ndarray, set_index: int) -> None:
                            "infinite values", code="non_finite_weights", field="mesh")
 
 
-def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.ndarray, np.ndarray]:
-    """(skeleton in our layout, joint nodes and bind matrices in the skin's own `joints` order).
-
-    glTF lets a skin list its joints in any order and have several roots; the skeleton is one tree with
-    parents first: extra roots hang from the root with the most joints under it, and `file_order` /
-    `file_parents` keep the upload's layout for export. skeleton.file_order[i] is joint i's skin slot.
-    """
+def _skin_binds(doc: GltfDocument, skin_index: int) -> tuple[np.ndarray, np.ndarray]:
+    """(joint nodes (J,) in the skin's `joints` order, bind matrices (J, 4, 4) = inverse of each inverse bind
+    matrix, in that skin's bind space; the joints' rest world matrices when the skin has none)."""
     skin = doc.items("skins")[skin_index]
     joints = np.asarray(skin.get("joints", []), dtype=np.int64)
     if len(joints) == 0:
         raise InvalidInput("skin has no joints", code="invalid_gltf", field="mesh")
-    if "inverseBindMatrices" in skin:
-        ibm = doc.accessor(skin["inverseBindMatrices"]).astype(np.float64).reshape(-1, 4, 4).transpose(0, 2, 1)
-        if len(ibm) != len(joints):
-            raise InvalidInput("inverseBindMatrices count differs from joints", code="invalid_gltf", field="mesh")
-        if not np.all(np.isfinite(ibm)):
-            raise InvalidInput("the skin's inverseBindMatrices hold NaN or infinite values", code="non_finite_bind", field="mesh")
-        bind = np.linalg.inv(ibm)
-    else:
-        bind = doc.world_matrices()[joints]
+    if "inverseBindMatrices" not in skin:
+        return joints, doc.world_matrices()[joints]
+    ibm = doc.accessor(skin["inverseBindMatrices"]).astype(np.float64).reshape(-1, 4, 4).transpose(0, 2, 1)
+    if len(ibm) != len(joints):
+        raise InvalidInput("inverseBindMatrices count differs from joints", code="invalid_gltf", field="mesh")
+    if not np.all(np.isfinite(ibm)):
+        raise InvalidInput("the skin's inverseBindMatrices hold NaN or infinite values", code="non_finite_bind", field="mesh")
+    try:
+        return joints, np.linalg.inv(ibm)
+    except np.linalg.LinAlgError:
+        raise InvalidInput("an inverse bind matrix is singular", code="invalid_gltf", field="mesh") from None
+
+
+def _depth(node_parents: np.ndarray, node: int) -> int:
+    """Number of ancestors of a node."""
+    d = 0
+    while node_parents[node] >= 0:
+        node, d = int(node_parents[node]), d + 1
+    return d
+
+
+@dataclass
+class _MergedSkins:
+    """Every skin of the file as one joint set in the reference skin's bind space.
+
+    joints: (J,) glTF nodes, the reference skin's joints first (its order), then each further skin's new ones.
+    bind:   (J, 4, 4) bind matrices in the reference skin's bind space.
+    slots:  skin index → (that skin's J_k,) int64 slot of each of its joints in `joints`.
+    frames: skin index → (4, 4) matrix taking that skin's bind space into the reference's.
+    """
+
+    joints: np.ndarray
+    bind: np.ndarray
+    slots: dict[int, np.ndarray]
+    frames: dict[int, np.ndarray]
+
+
+def _merge_skins(doc: GltfDocument, skins: list[int], binds: dict[int, tuple[np.ndarray, np.ndarray]],
+                 placements: dict[int, np.ndarray]) -> _MergedSkins:
+    """Union of the skins' joints, skins[0] being the reference; `binds` is `_skin_binds` of each skin and
+    `placements` each skin's bind space → scene (4, 4) at the nodes' rest pose.
+
+    Each skin binds its meshes in its own bind space. A skin sharing joints with those already merged is
+    brought into the reference's space through its shared joint nearest the scene root (the two bind matrices
+    of one joint are the same joint at bind); a skin sharing none through the two skins' placements, so that
+    the parts lie together at bind as they do in the scene. A shared joint keeps the bind matrix it was first
+    merged with.
+    """
+    node_parents = doc.node_parents()
+    joints: list[int] = []
+    bind: list[np.ndarray] = []
+    where: dict[int, int] = {}
+    slots: dict[int, np.ndarray] = {}
+    frames: dict[int, np.ndarray] = {}
+    pending = list(skins)
+    while pending:
+        sharing = [k for k in pending if any(int(n) in where for n in binds[k][0])]
+        k = sharing[0] if sharing else pending[0]
+        pending.remove(k)
+        nodes, own = binds[k]
+        if not joints:
+            frame = np.eye(4)
+        elif sharing:
+            shared = [i for i, n in enumerate(nodes) if int(n) in where]
+            i = min(shared, key=lambda i: _depth(node_parents, int(nodes[i])))
+            frame = bind[where[int(nodes[i])]] @ np.linalg.inv(own[i])
+        else:
+            frame = np.linalg.inv(placements[skins[0]]) @ placements[k]
+        frames[k] = frame
+        slot = np.empty(len(nodes), np.int64)
+        for i, n in enumerate(nodes):
+            if int(n) not in where:
+                where[int(n)] = len(joints)
+                joints.append(int(n))
+                bind.append(frame @ own[i])
+            slot[i] = where[int(n)]
+        slots[k] = slot
+    return _MergedSkins(np.asarray(joints, np.int64), np.stack(bind), slots, frames)
+
+
+def _similarity(source: np.ndarray, target: np.ndarray) -> np.ndarray | None:
+    """(4, 4) rotation, uniform scale and translation that best maps points `source` onto `target` (least
+    squares, Umeyama); None for fewer than 4 points or a degenerate spread."""
+    if len(source) < 4:
+        return None
+    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
+    a, b = source - mu_s, target - mu_t
+    var = float((a * a).sum()) / len(a)
+    if not np.isfinite(var) or var <= 1e-18:
+        return None
+    u, d, vt = np.linalg.svd(b.T @ a / len(a))
+    sign = np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt)) or 1.0])
+    rot = u @ sign @ vt
+    scale = float(np.trace(np.diag(d) @ sign)) / var
+    if not np.isfinite(scale) or scale <= 0:
+        return None
+    out = np.eye(4)
+    out[:3, :3] = scale * rot
+    out[:3, 3] = mu_t - scale * rot @ mu_s
+    return out
+
+
+def _skin_placement(doc: GltfDocument, nodes: np.ndarray, bind: np.ndarray,
+                    parts: list[tuple[np.ndarray, sp.coo_matrix]]) -> np.ndarray:
+    """(4, 4) where a skin's bind space lies in the scene at the nodes' rest pose: the similarity that best
+    maps its meshes' bind-space vertices onto where the rest pose skins them (robust to a posed root); the
+    root-most joint's rest world · inverse bind when the meshes are too few or flat to fit."""
+    rest = doc.world_matrices()[nodes] @ np.linalg.inv(bind)  # (J, 4, 4) joint matrices at rest
+    if parts:
+        v = np.concatenate([p[0] for p in parts])
+        w = sp.vstack([p[1] for p in parts]).tocsr()
+        sums = np.asarray(w.sum(axis=1)).ravel()
+        ok = sums > 0
+        blended = np.asarray((sp.diags(1.0 / np.where(ok, sums, 1.0)) @ w) @ rest[:, :3].reshape(len(rest), 12))
+        blended = blended.reshape(-1, 3, 4)
+        skinned = np.einsum("vab,vb->va", blended[:, :, :3], v) + blended[:, :, 3]
+        fit = _similarity(v[ok], skinned[ok])
+        if fit is not None:
+            return fit
+    node_parents = doc.node_parents()
+    root_most = min(range(len(nodes)), key=lambda i: _depth(node_parents, int(nodes[i])))
+    return rest[root_most]
+
+
+def _merged_skeleton(doc: GltfDocument, joints: np.ndarray, bind: np.ndarray) -> Skeleton:
+    """(skeleton in our layout) of the joint nodes `joints` with their bind matrices.
+
+    A joint's parent is its nearest ancestor node that is also a joint. glTF lets skins list joints in any
+    order and have several roots; the skeleton is one tree with parents first: extra roots hang from the root
+    with the most joints under it, and `file_order` / `file_parents` keep the layout of `joints` for export.
+    skeleton.file_order[i] is joint i's position in `joints`.
+    """
     node_parents = doc.node_parents()
     slot = {int(n): k for k, n in enumerate(joints)}
     parents = []
@@ -114,7 +238,7 @@ def _skin_skeleton(doc: GltfDocument, skin_index: int) -> tuple[Skeleton, np.nda
     file_parents = np.asarray(parents, dtype=np.int64)
     order = parents_first_order(_join_roots(file_parents))
     slot_skeleton = Skeleton(bind[:, :3, 3], _join_roots(file_parents), names, [], None, np.arange(len(joints)), file_parents)
-    return slot_skeleton.reordered(order), joints, bind
+    return slot_skeleton.reordered(order)
 
 
 def _unique(names: list[str]) -> list[str]:
@@ -142,33 +266,22 @@ def _join_roots(parents: np.ndarray) -> np.ndarray:
     return joined
 
 
-def _chosen_skin(doc: GltfDocument, skinned: list[dict]) -> int:
-    """The skin whose meshes hold the most vertices."""
+def _skinned_vertex_counts(doc: GltfDocument, skinned: list[dict]) -> dict[int, int]:
+    """Skin index → vertices of the primitives with JOINTS_0 that it binds (skins no such mesh uses are absent)."""
     counts: dict[int, int] = {}
     for n in skinned:
         for prim in doc.items("meshes")[n["mesh"]].get("primitives", []):
-            if "JOINTS_0" in prim.get("attributes", {}):
-                counts[n["skin"]] = counts.get(n["skin"], 0) + doc.items("accessors")[prim["attributes"]["POSITION"]]["count"]
+            attrs = prim.get("attributes", {})
+            if "JOINTS_0" in attrs and "POSITION" in attrs:
+                counts[n["skin"]] = counts.get(n["skin"], 0) + doc.items("accessors")[attrs["POSITION"]]["count"]
     if not counts:
         raise InvalidInput("skinned meshes carry no JOINTS_0", code="no_skin", field="mesh")
-    return max(counts, key=counts.__getitem__)
-
-
-def _same_rig(doc: GltfDocument, a: int, b: int) -> bool:
-    """Whether skins a and b bind the same joints with the same bind matrices (one armature, several meshes)."""
-    skins = doc.items("skins")
-    if a == b:
-        return True
-    if skins[a].get("joints") != skins[b].get("joints"):
-        return False
-    ibm = [skins[k].get("inverseBindMatrices") for k in (a, b)]
-    if ibm[0] is None or ibm[1] is None:
-        return ibm[0] == ibm[1]
-    return bool(np.allclose(doc.accessor(ibm[0]), doc.accessor(ibm[1]), atol=1e-6))
+    return counts
 
 
 def _skinned_part(doc: GltfDocument, prim: dict, j: int) -> tuple[np.ndarray, sp.coo_matrix] | None:
-    """(bind-space vertices, (V, J) weights) of one skinned primitive; None when it has no skin attributes."""
+    """(vertices in its skin's bind space, (V, j) weights over that skin's j joints) of one skinned primitive;
+    None when it has no skin attributes."""
     attrs = prim.get("attributes", {})
     if "POSITION" not in attrs or "JOINTS_0" not in attrs:
         return None
@@ -188,6 +301,8 @@ def _skinned_part(doc: GltfDocument, prim: dict, j: int) -> tuple[np.ndarray, sp
         cols.append(ji[keep])
         vals.append(wi[keep])
         s += 1
+    if not vals:
+        raise InvalidInput("JOINTS_0 comes without WEIGHTS_0", code="invalid_gltf", field="mesh")
     return v, sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(v), j))
 
 
@@ -201,19 +316,38 @@ def _rigid_joint(doc: GltfDocument, node: int, joints: np.ndarray) -> int | None
 
 
 def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
-    """Extract the rig whose skin covers most vertices; raise InvalidInput when the file has no skinned mesh.
+    """Extract the file's rig: the union of every skin a skinned mesh uses; raise InvalidInput when the file
+    has no skinned mesh.
 
-    Every mesh bound to that armature counts: skinned meshes of any skin with the same joints and bind
-    matrices, and unskinned meshes parented under one of its joints (a robot's rigid parts), which follow
-    that joint with weight 1 and are moved into bind space (bind @ inverse(joint's rest world) @ node world).
+    The skin covering most vertices is the reference: its bind space is the asset's, and the other skins'
+    meshes and joints are brought into it (`_merge_skins`); joints shared by several skins are one joint, and
+    each vertex's weights go to the merged joints. Unskinned meshes parented under a joint (a robot's rigid
+    parts) follow that joint with weight 1 and are moved into bind space (bind @ inverse(joint's rest world) @
+    node world).
     """
     nodes = doc.items("nodes")
     meshes = doc.items("meshes")
     skinned = [n for n in nodes if "skin" in n and "mesh" in n]
     if not skinned:
         raise InvalidInput("the file has no skinned mesh", code="no_skin", field="mesh")
-    skin_index = _chosen_skin(doc, skinned)
-    skeleton, joints, bind = _skin_skeleton(doc, skin_index)
+    counts = _skinned_vertex_counts(doc, skinned)
+    if any(not 0 <= k < len(doc.items("skins")) for k in counts):
+        raise InvalidInput("a mesh node refers to a skin that does not exist", code="invalid_gltf", field="mesh")
+    skin_order = sorted(counts, key=lambda k: (-counts[k], k))
+    binds = {k: _skin_binds(doc, k) for k in skin_order}
+    skin_parts: dict[int, list[tuple[dict, tuple[np.ndarray, sp.coo_matrix] | None]]] = {}  # by mesh node
+    for index, node in enumerate(nodes):
+        if "mesh" in node and int(node.get("skin", -1)) in binds:
+            j_k = len(binds[int(node["skin"])][0])
+            skin_parts[index] = [(prim, _skinned_part(doc, prim, j_k)) for prim in meshes[node["mesh"]].get("primitives", [])]
+    placements = {}
+    if len(skin_order) > 1:
+        for k in skin_order:
+            own = [part for i, ps in skin_parts.items() if int(nodes[i]["skin"]) == k for _, part in ps if part is not None]
+            placements[k] = _skin_placement(doc, *binds[k], own)
+    merged = _merge_skins(doc, skin_order, binds, placements)
+    joints, bind = merged.joints, merged.bind
+    skeleton = _merged_skeleton(doc, joints, bind)
     j = skeleton.num_joints
     world = doc.world_matrices()
     verts: list[np.ndarray] = []
@@ -222,16 +356,20 @@ def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
     for index, node in enumerate(nodes):
         if "mesh" not in node:
             continue
-        if "skin" in node:
-            if not _same_rig(doc, skin_index, int(node["skin"])):
-                continue
-            parts = [(prim, _skinned_part(doc, prim, j)) for prim in meshes[node["mesh"]].get("primitives", [])]
-        else:
+        parts: list[tuple[dict, tuple[np.ndarray, sp.spmatrix] | None]] = []
+        if index in skin_parts:
+            k = int(node["skin"])
+            frame, slots = merged.frames[k], merged.slots[k]
+            for prim, part in skin_parts[index]:
+                if part is not None:
+                    w = part[1]
+                    part = (part[0] @ frame[:3, :3].T + frame[:3, 3], sp.coo_matrix((w.data, (w.row, slots[w.col])), shape=(len(part[0]), j)))
+                parts.append((prim, part))
+        elif "skin" not in node:
             slot = _rigid_joint(doc, index, joints)
             if slot is None:
                 continue
             to_bind = bind[slot] @ np.linalg.inv(world[joints[slot]]) @ world[index]
-            parts = []
             for prim in meshes[node["mesh"]].get("primitives", []):
                 if "POSITION" not in prim.get("attributes", {}):
                     continue
@@ -249,9 +387,15 @@ def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
     w = sp.vstack(weights).tocsr()
     sums = np.asarray(w.sum(axis=1)).ravel()
     w = sp.diags(np.where(sums > 0, 1.0 / np.maximum(sums, 1e-12), 0.0)) @ w
-    order = skeleton.file_order  # skin slot of each of our joints
+    order = skeleton.file_order  # position in `joints` of each of our joints
     return RiggedAsset(vertices, np.concatenate(faces), skeleton, w.astype(np.float32).tocsr()[:, order],
-                       joints[order], bind[order], skin_index)
+                       joints[order], bind[order], skin_order[0], tuple(skin_order))
+
+
+def rig_rest_matrices(doc: GltfDocument, asset: RiggedAsset) -> np.ndarray:
+    """(J, 4, 4) joint world at the nodes' rest pose @ inverse bind, in the asset's joint order: the glTF joint
+    matrices that place the asset's bind-space vertices where the file shows them."""
+    return doc.world_matrices()[asset.joint_nodes] @ np.linalg.inv(asset.bind_matrices)
 
 
 def used_joints(skeleton: Skeleton, weights: sp.csr_matrix, eps: float = 1e-6) -> np.ndarray:
