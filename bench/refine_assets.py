@@ -6,8 +6,11 @@ tether); xbot also plays mocap_cmu_01_01.bvh retargeted onto its skeleton at the
 time estimate vs measured wall time and CPU time (all threads; the machine is shared, so wall time depends
 on the load, recorded with each row), substeps, the largest per-key volume change (refined, LBS, and what
 refinement adds beyond LBS), the largest offset from LBS in character heights, clamp counts, the size of
-the refined points (float32, at the clip's rate and at the simulation rate), and the quality gate's verdict
-on the refine stage (the same checks a job runs). Writes bench/results/refine_assets.json and prints a table.
+the refined points as float32 (at the clip's rate and at the simulation rate: what a plain point cache would
+take), the sizes of the refined.glb and refined.usdc the export stage writes (compact morph targets / blend
+shapes keyed at the simulation rate), their validators' error counts and the largest vertex error the compact
+form adds, and the quality gate's verdict on the refine stage (the same checks a job runs). Writes
+bench/results/refine_assets.json and prints a table.
 
     .venv/bin/python bench/refine_assets.py [--seconds 4] [--only xbot,fox] [--no-mocap]
 """
@@ -55,6 +58,33 @@ def _gate(vertices: np.ndarray, faces: np.ndarray, skeleton: Any, weights: Any, 
     return not hard, hard + [f"warn:{c}" for c in warned]
 
 
+def _export_sizes(name: str, vertices: np.ndarray, skeleton: Any, weights: Any, animation: Any, frames: np.ndarray,
+                  rate: float, workdir: Path) -> dict[str, Any]:
+    """refined.glb / refined.usdc as the export stage writes them: MB, validator errors, compact-form error."""
+    from simcore.ingest import ingest
+    from simcore.io.glb_rig_writer import write_rigged_glb
+    from simcore.io.gltf_validate import ValidatorUnavailable, validate_gltf_file
+    from simcore.io.usd_skel_writer import write_usd_skel
+    from simcore.io.usd_validate import validate_usd_file
+
+    mesh = ingest((ASSETS / f"{name}.glb").read_bytes(), "glb")
+    if mesh.vertices.shape != vertices.shape or np.abs(mesh.vertices - vertices).max() > 1e-4 * np.ptp(vertices):
+        return {"export": "skipped: the ingested mesh's vertices differ from the bench's"}
+    glb = write_rigged_glb(mesh.glb, skeleton, weights, animation=animation, morph_frames=frames, morph_rate=rate,
+                           out_path=workdir / "refined.glb")
+    usd = write_usd_skel(mesh.glb, skeleton, weights, workdir / "refined.usdc", animation=animation,
+                         refined_frames=frames, refined_rate=rate)[0]
+    try:
+        glb_errors: Any = validate_gltf_file(workdir / "refined.glb").errors
+    except ValidatorUnavailable:
+        glb_errors = "n/a"
+    morph = glb.stats["morph"]
+    return {"glb_MB": round(glb.stats["bytes"] / 2**20, 2), "usdc_MB": round(usd.stat().st_size / 2**20, 2),
+            "glb_errors": glb_errors, "usd_errors": len(validate_usd_file(usd).errors),
+            "morph_keys": morph["keys"], "morph_basis": morph["basis_shapes"],
+            "morph_max_error_heights": round(morph["max_error"] / max(float(np.ptp(vertices, axis=0).max()), 1e-12), 6)}
+
+
 def run_case(name: str, clip: str, vertices: np.ndarray, faces: np.ndarray, skeleton: Any, weights: Any,
              animation: Any, workdir: Path) -> dict[str, Any]:
     from simcore.mpm.refine import refine_character
@@ -80,6 +110,7 @@ def run_case(name: str, clip: str, vertices: np.ndarray, faces: np.ndarray, skel
         "driver_speed_unlimited_m_s": r["max_driver_speed_unlimited_m_s"], "driver_speed_m_s": r["max_driver_speed_m_s"],
         "driver_steps_capped": r["driver_steps_capped"], "clamped": r["clamped"],
         "points_MB_clip_rate": round(mb * animation.num_frames, 2), "points_MB_sim_rate": round(mb * r["frames"], 2),
+        **_export_sizes(name, vertices, skeleton, weights, animation, result.frames, opts.rate, workdir),
         "gate_passes": passes, "gate_codes": codes,
     }
 
@@ -124,7 +155,8 @@ def main() -> None:
     only = {s for s in args.only.split(",") if s} or None
     rows = []
     head = (f"{'asset':<18} {'clip':<22} {'verts':>6} {'parts':>6} {'keys':>4} {'subst':>6} {'est s':>7} {'sim s':>7} "
-            f"{'vol ref':>8} {'vol lbs':>8} {'added':>7} {'off/h':>6} {'MB clip':>8} {'MB sim':>7} gate")
+            f"{'vol ref':>8} {'vol lbs':>8} {'added':>7} {'off/h':>6} {'MB clip':>8} {'MB sim':>7} {'glb MB':>7} "
+            f"{'usd MB':>7} gate")
     print(head + "   (wall s / CPU s / load)", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         for case in cases(args.seconds, {"xbot"} if args.mocap_only else only, not args.no_mocap):
@@ -142,7 +174,8 @@ def main() -> None:
                   f"{r['substeps']:>6} {r['estimate_s']:>7.1f} {r['simulation_s']:>7.1f} "
                   f"{r['max_volume_change_refined']:>8.4f} {r['max_volume_change_lbs']:>8.4f} "
                   f"{r['max_volume_change_added']:>7.4f} {r['max_offset_heights']:>6.4f} {r['points_MB_clip_rate']:>8.1f} "
-                  f"{r['points_MB_sim_rate']:>7.1f} {'pass' if r['gate_passes'] else 'FAIL'} {' '.join(r['gate_codes'])}"
+                  f"{r['points_MB_sim_rate']:>7.1f} {r.get('glb_MB', float('nan')):>7.2f} {r.get('usdc_MB', float('nan')):>7.2f} "
+                  f"{'pass' if r['gate_passes'] else 'FAIL'} {' '.join(r['gate_codes'])}"
                   f"   ({r['total_s']:.0f} / {r['cpu_s']:.0f} / {r['load_average']})",
                   flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -4,7 +4,8 @@ Writes into state.workdir and state.artifacts:
   rigged.glb, rigged.usdc, rigged.usdz         always (needs state.mesh, state.skeleton, state.weights)
   texture_<i>.png|jpg                          the upload's images, which the .usdc files' materials reference
   animated.glb, animated.usdc, animated.usdz   when state.animation is set
-  refined.glb, refined.usdc                    when state.refined_frames is set (frames of that animation)
+  refined.glb, refined.usdc                    when state.refined_frames is set (frames of that animation; keyed
+                                               at the simulation rate, compact morph targets / blend shapes)
   rigged.fbx, animated.fbx                     when options.fbx (its unit and axes) and Blender's bpy is there
                                                (simcore/io/fbx_export.py)
 Joints are named first, by `options.naming` (simcore/export_naming.py).
@@ -40,7 +41,8 @@ def _write_glbs(state: PipelineState, progress: StageProgress) -> list[Path]:
     if state.animation is not None:
         plans.append(("animated.glb", {"animation": state.animation}))
         if state.refined_frames is not None:
-            plans.append(("refined.glb", {"animation": state.animation, "morph_frames": state.refined_frames}))
+            plans.append(("refined.glb", {"animation": state.animation, "morph_frames": state.refined_frames,
+                                          "morph_rate": state.options.refine.rate}))
     written = []
     for i, (name, extra) in enumerate(plans):
         progress.check_cancel()
@@ -72,7 +74,7 @@ def _write_usds(state: PipelineState, progress: StageProgress) -> list[Path]:
             progress.check_cancel()
             written += write_usd_skel(state.mesh.glb, state.skeleton, state.weights, state.workdir / "refined.usdc",
                                       max_influences=k, animation=state.animation,
-                                      refined_frames=state.refined_frames)
+                                      refined_frames=state.refined_frames, refined_rate=state.options.refine.rate)
     for path in written:
         state.artifacts[path.name] = path
     progress(0.7)

@@ -108,6 +108,8 @@ def write_rigged_glb(
     animation: JointAnimation | None = None,
     morph_frames: np.ndarray | None = None,
     max_morph_targets: int = 256,
+    morph_rate: float | None = None,
+    morph_tolerance: float | None = None,
     out_path: Path | None = None,
 ) -> GlbExport:
     """Rig mesh.glb with `skeleton` and `weights`; optionally animate it and bake refined frames.
@@ -120,6 +122,10 @@ def write_rigged_glb(
     morph_frames: (T, V, 3) float world vertex positions at animation frames 0..T-1 (physics refinement),
                   baked as morph targets on top of the skinned animation (see morph_bake).
     max_morph_targets: cap on targets; longer clips key a uniform subset of frames, LINEAR between them.
+    morph_rate:   most morph keys per second (the simulation's rate: the frames between were interpolated);
+                  None keys every frame.
+    morph_tolerance: vertex error the compact morph form may add, as a fraction of the bind pose's largest
+                  bounding-box side (default morph_compact.TOLERANCE; see glb_animation).
     out_path:     when given, the file is written there too.
     """
     if max_influences not in (4, 8):
@@ -175,11 +181,18 @@ def write_rigged_glb(
         stats["animation"] = {"name": animation.name, "frames": animation.num_frames, "fps": animation.fps,
                               "channels": len(clip["channels"])}
         if morph_frames is not None:
+            from simcore.io.glb_animation import morph_key_frames
             from simcore.io.morph_bake import bind_space_offsets
+            from simcore.io.morph_compact import TOLERANCE
 
-            offsets = bind_space_offsets(layout.vertices, skeleton, infl, animation, morph_frames)
-            stats["morph"] = add_morph_animation(builder, clip, layout.slices, offsets, animation.fps,
-                                                 max_morph_targets)
+            count = len(morph_frames)
+            keys = morph_key_frames(count, max_morph_targets, animation.fps, morph_rate)
+            offsets = bind_space_offsets(layout.vertices, skeleton, infl, animation, np.asarray(morph_frames)[keys],
+                                         frames=keys)
+            size = float(np.ptp(layout.vertices, axis=0).max()) if len(layout.vertices) else 0.0
+            fraction = TOLERANCE if morph_tolerance is None else morph_tolerance
+            stats["morph"] = add_morph_animation(builder, clip, layout.slices, offsets, keys, count, animation.fps,
+                                                 max_morph_targets, tolerance=fraction * size)
         builder.json["animations"] = [clip]
     mark_vertex_views(builder.json)
     data = builder.to_glb()

@@ -19,14 +19,20 @@ SINGULAR_DET = 1e-9  # blended 3x3 parts below this determinant are inverted by 
 
 
 def bind_space_offsets(vertices: np.ndarray, skeleton: Skeleton, influences: Influences,
-                       animation: JointAnimation, refined: np.ndarray) -> np.ndarray:
+                       animation: JointAnimation, refined: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
     """(T, V, 3) float32 morph offsets.
 
     vertices:  (V, 3) float bind-pose positions.
-    refined:   (T, V, 3) float world positions at animation frames 0..T-1 (T ≤ animation frames).
+    refined:   (T, V, 3) float world positions at animation frames 0..T-1 (T ≤ animation frames), or at
+               `frames` (T,) when given.
     """
     refined = np.asarray(refined, dtype=np.float64)
     v = len(vertices)
+    frames = np.arange(len(refined)) if frames is None else np.asarray(frames, np.int64)
+    if len(frames) != len(refined) or (len(frames) and not 0 <= frames.min() <= frames.max() < animation.num_frames):
+        raise InvalidInput(f"{len(refined)} refined frames do not match their frame numbers {len(frames)} within the "
+                           f"animation's {animation.num_frames} frames", code="export_shape_mismatch",
+                           field="refined_frames")
     if refined.ndim != 3 or refined.shape[1:] != (v, 3) or not 1 <= len(refined) <= animation.num_frames:
         raise InvalidInput(
             f"refined frames {refined.shape} do not match {v} vertices and {animation.num_frames} animation frames",
@@ -34,7 +40,7 @@ def bind_space_offsets(vertices: np.ndarray, skeleton: Skeleton, influences: Inf
     if not np.all(np.isfinite(refined)):
         raise InvalidInput("refined frames contain non-finite positions", code="export_shape_mismatch",
                            field="refined_frames")
-    mats = joint_tracks(skeleton, animation).skin_matrices(skeleton)[: len(refined), :, :3, :]  # (T, J, 3, 4)
+    mats = joint_tracks(skeleton, animation).skin_matrices(skeleton)[frames, :, :3, :]  # (T, J, 3, 4)
     w = influences.weights.astype(np.float64)
     out = np.empty(refined.shape, np.float32)
     for t in range(len(refined)):

@@ -7,8 +7,10 @@ Layout written (metersPerUnit 1, upAxis Y, defaultPrim /Character):
   /Character/Materials/<m>  UsdPreviewSurface per glTF material; textures written beside the file (usd_materials)
   /Character/Geometry/<m>   Mesh per glTF triangle primitive: points, faceVertexIndices, normals, primvars:st,
                             primvars:skel:jointIndices/jointWeights (elementSize = influences), geomBindTransform
-Refined files keep the skeleton and its animation but write the meshes' simulated positions as
-time-sampled points with no skin binding, so nothing skins them twice.
+Refined files are animated files whose meshes also carry the refinement as UsdSkel BlendShapes (applied in bind
+space before skinning, as glTF morph targets are): the compact form of morph_compact (basis shapes, and per key
+a residual shape with pointIndices for the vertices the basis misses), keyed at most `refined_rate` times a
+second and weighted by the SkelAnimation's time-sampled blendShapeWeights (linear between keys).
 Matrices: ours are column-vector 4x4; USD's Gf.Matrix4d is row-vector, hence the transposes. Quaternions:
 ours xyzw, USD's Gf.Quatf real-first. pxr is imported lazily (worker-only dependency).
 """
@@ -35,6 +37,8 @@ if TYPE_CHECKING:
     from simcore.motion.types import JointAnimation
 
 ROOT = "/Character"
+BLEND_BASIS_VERTEX_BYTES = 12.0  # a float3 offset
+BLEND_RESIDUAL_VERTEX_BYTES = 16.0  # a float3 offset and its int point index
 
 
 def usd_identifier(name: str, taken: set[str]) -> str:
@@ -168,6 +172,54 @@ def _define_animation(stage, skeleton: Skeleton, joints: list[str], animation: J
     return str(anim.GetPath())
 
 
+def _define_refinement(stage, meshes: list, layout: MeshLayout, skeleton: Skeleton, infl: Influences,
+                       animation: JointAnimation, refined: np.ndarray, rate: float | None,
+                       tolerance: float | None) -> None:
+    """The refinement as blend shapes on every mesh and their weights on the SkelAnimation (see module doc)."""
+    from pxr import Sdf, UsdSkel, Vt
+
+    from simcore.io.glb_animation import morph_key_frames
+    from simcore.io.morph_bake import bind_space_offsets
+    from simcore.io.morph_compact import TOLERANCE, compact_offsets
+
+    keys = morph_key_frames(len(refined), len(refined), animation.fps, rate)
+    offsets = bind_space_offsets(layout.vertices, skeleton, infl, animation, refined[keys], frames=keys)
+    size = float(np.ptp(layout.vertices, axis=0).max()) if len(layout.vertices) else 0.0
+    compact = compact_offsets(offsets, (TOLERANCE if tolerance is None else tolerance) * size,
+                              BLEND_BASIS_VERTEX_BYTES, BLEND_RESIDUAL_VERTEX_BYTES)
+    names = [f"refine_basis_{j}" for j in range(compact.rank)] + [f"refine_frame_{int(f)}" for f in keys]
+    for mesh, rows in meshes:
+        binding = UsdSkel.BindingAPI(mesh.GetPrim())
+        given = list(binding.GetBlendShapesAttr().Get() or [])
+        targets = list(binding.GetBlendShapeTargetsRel().GetTargets())
+        for j in range(compact.rank):
+            shape = UsdSkel.BlendShape.Define(stage, mesh.GetPath().AppendChild(names[j]))
+            shape.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(compact.basis[j, rows])))
+            given.append(names[j])
+            targets.append(Sdf.Path(shape.GetPath()))
+        for i in range(len(keys)):
+            r = compact.residual_rows[i]
+            inside = (r >= rows.start) & (r < rows.stop)
+            if not inside.any():
+                continue
+            name = names[compact.rank + i]
+            shape = UsdSkel.BlendShape.Define(stage, mesh.GetPath().AppendChild(name))
+            shape.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(compact.residual_values[i][inside])))
+            shape.CreatePointIndicesAttr(Vt.IntArray.FromNumpy((r[inside] - rows.start).astype(np.int32)))
+            given.append(name)
+            targets.append(Sdf.Path(shape.GetPath()))
+        binding.CreateBlendShapesAttr(given)
+        binding.CreateBlendShapeTargetsRel().SetTargets(targets)
+    anim = UsdSkel.Animation.Get(stage, f"{ROOT}/Animation")
+    anim.CreateBlendShapesAttr(names)
+    weights = np.zeros((len(keys), len(names)), np.float32)
+    weights[:, :compact.rank] = compact.coefficients
+    weights[np.arange(len(keys)), compact.rank + np.arange(len(keys))] = 1.0
+    attr = anim.CreateBlendShapeWeightsAttr()
+    for i, f in enumerate(keys):
+        attr.Set(Vt.FloatArray.FromNumpy(weights[i]), float(f))
+
+
 def write_usd_skel(
     mesh_glb: bytes,
     skeleton: Skeleton,
@@ -177,18 +229,22 @@ def write_usd_skel(
     max_influences: int = 4,
     animation: JointAnimation | None = None,
     refined_frames: np.ndarray | None = None,
+    refined_rate: float | None = None,
+    refined_tolerance: float | None = None,
     usdz_path: Path | None = None,
 ) -> list[Path]:
     """Write a UsdSkel file (.usdc/.usda by extension) and optionally a .usdz package of it.
 
     mesh_glb / skeleton / weights: as for write_rigged_glb ((V, J) weights in mesh.glb vertex order).
     animation:      clip bound as the Skeleton's animationSource (time code k = frame k, at its fps).
-    refined_frames: (T, V, 3) float world positions at animation frames 0..T-1; written as time-sampled
-                    points on unbound meshes (needs `animation` for the time base).
+    refined_frames: (T, V, 3) float world positions at animation frames 0..T-1; written as blend shapes of the
+                    skinned meshes (needs `animation`); refined_rate: most keys per second (None: every frame);
+                    refined_tolerance: vertex error the compact form may add, as a fraction of the bind pose's
+                    largest bounding-box side (default morph_compact.TOLERANCE).
     Returns the written paths: the USD files, then the texture files (texture_<i>.png|jpg) beside them that
     the .usdc references and the .usdz holds.
     """
-    from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
+    from pxr import Kind, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils
 
     skeleton.validate()
     forest = file_forest(skeleton)  # a kept rig's extra roots stay roots (UsdSkel allows a forest)
@@ -222,19 +278,13 @@ def write_usd_skel(
     if animation is not None:
         anim_path = _define_animation(stage, skeleton, joints, animation)
         UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([Sdf.Path(anim_path)])
-    bound = refined_frames is None
     out_path = Path(out_path)
     textures = write_texture_files(layout.doc, out_path.parent)
     materials = define_materials(stage, layout.doc, ROOT, textures)
-    meshes = _define_meshes(stage, layout, infl if bound else None, str(skel.GetPath()) if bound else None,
-                            materials)
-    if refined_frames is not None:
-        for mesh, rows in meshes:
-            attr = mesh.GetPointsAttr()
-            for t, frame in enumerate(refined_frames):
-                attr.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(frame[rows])), t)
-            lo, hi = refined_frames[:, rows].min((0, 1)), refined_frames[:, rows].max((0, 1))
-            mesh.GetExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))
+    meshes = _define_meshes(stage, layout, infl, str(skel.GetPath()), materials)
+    if refined_frames is not None and animation is not None:
+        _define_refinement(stage, meshes, layout, skeleton, infl, animation, refined_frames, refined_rate,
+                           refined_tolerance)
     out_path.unlink(missing_ok=True)
     stage.GetRootLayer().Export(str(out_path))
     written = [out_path]

@@ -39,7 +39,7 @@ def test_stage_writes_and_validates_every_output(tmp_path):
     assert set(state.report["validation"]) == names
     assert all(v["errors"] == 0 for v in state.report["validation"].values()), state.report["validation"]
     assert state.weights is not None and state.report["weights"]["vertices"] == state.weights.shape[0]
-    assert state.report["export"]["refined.glb"]["morph"]["targets"] == 6
+    assert state.report["export"]["refined.glb"]["morph"]["keys"] == 6
     assert seen[-1] == 1.0 and seen == sorted(seen)
 
 

@@ -48,29 +48,67 @@ def test_animated_glb_validates_and_carries_the_clip(rig, tmp_path):
     assert len(pygltflib.GLTF2.load_from_bytes(export.data).animations) == 1
 
 
+def _shown(doc: GltfDocument, skeleton, animation, frame: int, key: int) -> np.ndarray:
+    """Vertex positions a viewer shows at clip frame `frame`, which is morph key `key`: POSITION plus every
+    target times its animated weight at that key, skinned with the stored influences."""
+    prim = doc.json["meshes"][0]["primitives"][0]
+    channel = next(c for c in doc.json["animations"][0]["channels"] if c["target"]["path"] == "weights")
+    sampler = doc.json["animations"][0]["samplers"][channel["sampler"]]
+    targets = prim["targets"]
+    weights = doc.accessor(sampler["output"]).reshape(-1, len(targets))[key]
+    morphed = doc.accessor(prim["attributes"]["POSITION"]).astype(np.float64)
+    for w, target in zip(weights, targets):
+        morphed += float(w) * doc.accessor(target["POSITION"])
+    joints = doc.accessor(prim["attributes"]["JOINTS_0"]).astype(np.int64)
+    w = doc.accessor(prim["attributes"]["WEIGHTS_0"]).astype(np.float64)
+    blended = np.einsum("vk,vkab->vab", w, joint_tracks(skeleton, animation).skin_matrices(skeleton)[frame][joints])
+    return np.einsum("vab,vb->va", blended[:, :3, :3], morphed) + blended[:, :3, 3]
+
+
 def test_refined_glb_morph_targets_replay_the_simulated_frames(rig, tmp_path):
     glb, mesh, skeleton, weights, animation = rig
     refined = _jiggle(mesh, skeleton, weights, animation)
     path = tmp_path / "refined.glb"
-    export = write_rigged_glb(glb, skeleton, weights, animation=animation, morph_frames=refined, out_path=path)
+    export = write_rigged_glb(glb, skeleton, weights, animation=animation, morph_frames=refined, out_path=path,
+                              morph_tolerance=0.0)
     result = validate_gltf_file(path)
     assert result.errors == 0 and result.warnings == 0, result.messages
     doc = GltfDocument.from_bytes(export.data)
-    prim = doc.json["meshes"][0]["primitives"][0]
-    assert len(prim["targets"]) == len(refined) == len(doc.json["meshes"][0]["weights"])
+    assert "KHR_mesh_quantization" in doc.json["extensionsRequired"]
+    assert export.stats["morph"]["keys"] == len(refined) == 12
     # A viewer morphs in bind space, then skins with the stored influences: that must give the simulation back.
-    joints = doc.accessor(prim["attributes"]["JOINTS_0"]).astype(np.int64)
-    w = doc.accessor(prim["attributes"]["WEIGHTS_0"]).astype(np.float64)
-    skin = joint_tracks(skeleton, animation).skin_matrices(skeleton)
     for t in (0, 5, 11):
-        morphed = doc.accessor(prim["attributes"]["POSITION"]) + doc.accessor(prim["targets"][t]["POSITION"])
-        blended = np.einsum("vk,vkab->vab", w, skin[t][joints])
-        shown = np.einsum("vab,vb->va", blended[:, :3, :3], morphed) + blended[:, :3, 3]
-        np.testing.assert_allclose(shown, refined[t], atol=1e-5)
+        np.testing.assert_allclose(_shown(doc, skeleton, animation, t, t), refined[t], atol=2e-5)
     weights_channel = next(c for c in doc.json["animations"][0]["channels"] if c["target"]["path"] == "weights")
-    sampler = doc.json["animations"][0]["samplers"][weights_channel["sampler"]]
-    assert sampler["interpolation"] == "STEP"
-    np.testing.assert_array_equal(doc.accessor(sampler["output"]).reshape(12, 12), np.eye(12))
+    assert doc.json["animations"][0]["samplers"][weights_channel["sampler"]]["interpolation"] == "STEP"
+
+
+def test_compact_morphs_stay_within_the_tolerance_and_shrink(rig, tmp_path):
+    glb, mesh, skeleton, weights, animation = rig
+    refined = _jiggle(mesh, skeleton, weights, animation)
+    path = tmp_path / "refined.glb"
+    export = write_rigged_glb(glb, skeleton, weights, animation=animation, morph_frames=refined, out_path=path,
+                              morph_tolerance=2e-3)
+    assert validate_gltf_file(path).errors == 0
+    stats = export.stats["morph"]
+    size = float(np.ptp(mesh.vertices, axis=0).max())
+    assert stats["tolerance"] == pytest.approx(2e-3 * size, rel=1e-6)
+    assert stats["max_error"] <= 1.25 * stats["tolerance"]
+    assert stats["basis_shapes"] > 0  # the wobble is a travelling wave: two shapes carry it
+    assert stats["bytes"] < 0.5 * len(refined) * len(mesh.vertices) * 12  # well under float32 per frame
+    doc = GltfDocument.from_bytes(export.data)
+    for t in (3, 8):
+        shown = _shown(doc, skeleton, animation, t, t)
+        assert np.linalg.norm(shown - refined[t], axis=1).max() <= stats["max_error"] * 1.01 + 1e-5
+    sparse = [doc.json["accessors"][tg["POSITION"]] for tg in doc.json["meshes"][0]["primitives"][0]["targets"]]
+    assert all(a["componentType"] in (5120, 5122) and a["normalized"] for a in sparse)
+
+
+def test_morph_keys_follow_the_simulation_rate():
+    np.testing.assert_array_equal(morph_key_frames(12, 5), [0, 3, 6, 8, 11])
+    keys = morph_key_frames(481, 256, fps=120.0, key_rate=30.0)
+    assert len(keys) == 121 and np.all(np.diff(keys) == 4)
+    assert len(morph_key_frames(12, 256, fps=24.0, key_rate=30.0)) == 12  # a clip slower than the rate: every frame
 
 
 def test_long_refinement_keys_a_capped_subset_linearly(rig, tmp_path):
@@ -78,9 +116,9 @@ def test_long_refinement_keys_a_capped_subset_linearly(rig, tmp_path):
     path = tmp_path / "refined_sparse.glb"
     export = write_rigged_glb(glb, skeleton, weights, animation=animation, max_morph_targets=5,
                               morph_frames=_jiggle(mesh, skeleton, weights, animation), out_path=path)
-    assert export.stats["morph"]["targets"] == 5 and export.stats["morph"]["interpolation"] == "LINEAR"
+    assert export.stats["morph"]["keys"] == 5 and export.stats["morph"]["interpolation"] == "LINEAR"
+    assert export.stats["morph"]["targets"] <= 5
     assert validate_gltf_file(path).errors == 0
-    np.testing.assert_array_equal(morph_key_frames(12, 5), [0, 3, 6, 8, 11])
 
 
 def test_refined_frames_need_an_animation(rig):

@@ -66,17 +66,50 @@ def test_usdskel_skins_the_animated_file_like_our_lbs(rig, tmp_path):
         np.testing.assert_allclose(np.asarray(points), ours[t], atol=1e-5)
 
 
-def test_refined_usdc_holds_time_sampled_points(rig, tmp_path):
+def _usd_refined_points(stage, t: float) -> np.ndarray:
+    """What UsdSkel shows at time t: the mesh's blend shapes at the animation's weights, then skinned."""
+    from pxr import Usd, UsdGeom, UsdSkel, Vt
+
+    cache = UsdSkel.Cache()
+    cache.Populate(UsdSkel.Root(stage.GetPrimAtPath("/Character")), Usd.PrimDefaultPredicate)
+    skel_query = cache.GetSkelQuery(UsdSkel.Skeleton(stage.GetPrimAtPath("/Character/Skeleton")))
+    mesh_prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    skinning = cache.GetSkinningQuery(mesh_prim)
+    anim = UsdSkel.Animation(stage.GetPrimAtPath("/Character/Animation"))
+    by_name = dict(zip(anim.GetBlendShapesAttr().Get(), anim.GetBlendShapeWeightsAttr().Get(t)))
+    binding = UsdSkel.BindingAPI(mesh_prim)
+    weights = Vt.FloatArray([by_name.get(n, 0.0) for n in binding.GetBlendShapesAttr().Get()])
+    query = UsdSkel.BlendShapeQuery(binding)
+    sub_weights, shape_indices, sub_indices = query.ComputeSubShapeWeights(weights)
+    points = UsdGeom.Mesh(mesh_prim).GetPointsAttr().Get()
+    assert query.ComputeDeformedPoints(sub_weights, shape_indices, sub_indices, query.ComputeBlendShapePointIndices(),
+                                       query.ComputeSubShapePointOffsets(), points)
+    assert skinning.ComputeSkinnedPoints(skel_query.ComputeSkinningTransforms(t), points, t)
+    return np.asarray(points, np.float64)
+
+
+def test_refined_usdc_replays_the_refinement_as_blend_shapes(rig, tmp_path):
     from pxr import Usd, UsdGeom, UsdSkel
 
     glb, mesh, skeleton, weights, animation = rig
-    frames = np.random.default_rng(0).normal(size=(5, len(mesh.vertices), 3)).astype(np.float32)
-    path = write_usd_skel(glb, skeleton, weights, tmp_path / "refined.usdc", animation=animation, refined_frames=frames)[0]
-    assert validate_usd_file(path).ok
+    lbs = linear_blend(mesh.vertices, weights, joint_tracks(skeleton, animation).skin_matrices(skeleton))
+    t = np.arange(len(lbs))[:, None, None]
+    frames = (lbs + 0.01 * np.sin(t + mesh.vertices[None, :, 1:2] * 20) * np.array([1.0, 0.0, 0.5])).astype(np.float32)
+    frames[6, 7] += [0.0, 0.03, 0.0]  # a lone spike on one key, which the wave's shapes do not carry
+    path = write_usd_skel(glb, skeleton, weights, tmp_path / "refined.usdc", animation=animation, refined_frames=frames,
+                          refined_rate=12.0)[0]
+    result = validate_usd_file(path)
+    assert result.ok and not result.warnings, result.errors + result.warnings
     stage = Usd.Stage.Open(str(path))
     mesh_prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
-    assert not UsdSkel.BindingAPI(mesh_prim).GetSkeletonRel().GetTargets()  # not skinned a second time
-    np.testing.assert_array_equal(np.asarray(UsdGeom.Mesh(mesh_prim).GetPointsAttr().Get(3)), frames[3])
+    shapes = list(UsdSkel.BindingAPI(mesh_prim).GetBlendShapesAttr().Get())
+    assert any(n.startswith("refine_") for n in shapes)
+    size = float(np.ptp(mesh.vertices, axis=0).max())
+    keys = UsdSkel.Animation(stage.GetPrimAtPath("/Character/Animation")).GetBlendShapeWeightsAttr().GetTimeSamples()
+    assert keys == [0, 2, 4, 6, 8, 10, 11]  # every other frame of the 24 fps clip, and its last
+    for k in (0, 6, 11):
+        err = np.linalg.norm(_usd_refined_points(stage, k) - frames[k], axis=1)
+        assert err.max() <= 1e-3 * size + 1e-5, (k, err.max())
 
 
 def test_joint_names_become_unique_usd_paths():
