@@ -22,6 +22,63 @@ def signed_volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return triple.sum(axis=1) / 6.0
 
 
+def volume_parts(vertices: np.ndarray, faces: np.ndarray, weld: float = 1e-6) -> np.ndarray:
+    """(F,) int64 part of each face: connected components of the surface with vertices closer than `weld` × the
+    mesh size merged first (seams that split vertices do not split a part)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    v = np.asarray(vertices, np.float64)
+    faces = np.asarray(faces, np.int64)
+    if len(faces) == 0:
+        return np.zeros(0, np.int64)
+    size = float(np.ptp(v, axis=0).max()) or 1.0
+    _, welded = np.unique(np.round(v / (weld * size)).astype(np.int64), axis=0, return_inverse=True)
+    welded = welded.reshape(-1)
+    f = welded[faces]
+    n = int(welded.max()) + 1
+    edges = coo_matrix((np.ones(2 * len(f)), (np.concatenate([f[:, 0], f[:, 1]]), np.concatenate([f[:, 1], f[:, 2]]))),
+                       shape=(n, n))
+    _, labels = connected_components(edges, directed=False)
+    return labels[f[:, 0]].astype(np.int64)
+
+
+def part_volumes(frames: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) -> np.ndarray:
+    """(T, P) signed volume of each part's triangles as cones from that part's vertex centroid in the same frame.
+
+    For a closed part this is its enclosed volume; for an open one it depends on the apex, and with the part's own
+    centroid as apex it is unchanged by any rigid motion of the part, so its ratio to the rest value measures
+    deformation alone (the origin-referenced sum of a whole open or multi-part mesh changes as parts move).
+    """
+    f = np.asarray(frames, dtype=np.float64)
+    f = f[None] if f.ndim == 2 else f
+    faces = np.asarray(faces, np.int64)
+    parts = int(face_parts.max()) + 1 if len(face_parts) else 0
+    corner_parts = np.repeat(face_parts, 3)
+    counts = np.bincount(corner_parts, minlength=parts).astype(np.float64)
+    out = np.zeros((len(f), parts))
+    for t in range(len(f)):
+        corners = f[t][faces.reshape(-1)]  # (3F, 3); a part's centre is the mean of its faces' corners
+        sums = np.stack([np.bincount(corner_parts, corners[:, k], minlength=parts) for k in range(3)], 1)
+        centre = sums.astype(np.float64) / np.maximum(counts, 1.0)[:, None]
+        apex = centre[face_parts]
+        a, b, c = (f[t][faces[:, k]] - apex for k in range(3))
+        triple = np.einsum("fi,fi->f", a, np.cross(b, c))
+        out[t] = np.bincount(face_parts, triple, minlength=parts) / 6.0
+    return out
+
+
+def volume_change(parts: np.ndarray, rest: np.ndarray) -> np.ndarray:
+    """(T,) volume-weighted mean of each part's |V_p(t) / V_p(rest) − 1| from part volumes (T, P) and rest (P,):
+    opposite changes of different parts do not cancel; a single closed part gives |V(t) / V(rest) − 1|."""
+    weight = np.abs(rest)
+    total = float(weight.sum())
+    if total <= 0.0:
+        return np.zeros(len(parts))
+    safe = np.where(weight > 0, rest, 1.0)
+    return (np.abs(parts / safe[None] - 1.0) * weight[None]).sum(axis=1) / total
+
+
 def chamfer(a: np.ndarray, b: np.ndarray) -> float:
     """Symmetric chamfer distance: mean nearest-neighbour distance a→b plus b→a, halved. a: (N, 3), b: (M, 3)."""
     return 0.5 * float(cKDTree(b).query(a)[0].mean() + cKDTree(a).query(b)[0].mean())

@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.motion.types import JointAnimation
-from simcore.mpm.measures import signed_volumes
+from simcore.mpm.measures import part_volumes, volume_change, volume_parts
 from simcore.mpm.sampling import nearest_rows
 from simcore.mpm.scene import CharacterScene, build_scene, particle_budget
 from simcore.options import RefineOptions
@@ -176,27 +176,32 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
     return RefineResult(out, report, list(scene.info.get("notes", [])))
 
 
-def _volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    return np.concatenate([signed_volumes(frames[i:i + VOLUME_BLOCK], faces) for i in range(0, len(frames), VOLUME_BLOCK)])
+def _part_volumes(frames: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) -> np.ndarray:
+    return np.concatenate([part_volumes(frames[i:i + VOLUME_BLOCK], faces, face_parts)
+                           for i in range(0, len(frames), VOLUME_BLOCK)])
 
 
 def _report(scene: CharacterScene, refined: np.ndarray, lbs: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> dict:
-    """Figures at the simulated keys on the clip: volume / rest volume, offsets from LBS."""
-    rest = float(signed_volumes(vertices, faces)[0])
+    """Figures at the simulated keys on the clip: volume change (per surface part, measures.part_volumes, so open
+    and multi-part meshes are measured by deformation alone), offsets from LBS."""
+    face_parts = volume_parts(vertices, faces)
+    rest_parts = part_volumes(vertices, faces, face_parts)[0]
+    rest = float(rest_parts.sum())
     safe = rest if abs(rest) > 1e-12 else 1.0
-    vol_lbs = _volumes(lbs, faces) / safe
-    vol_ref = _volumes(refined, faces) / safe
+    parts_lbs, parts_ref = _part_volumes(lbs, faces, face_parts), _part_volumes(refined, faces, face_parts)
+    change_lbs, change_ref = volume_change(parts_lbs, rest_parts), volume_change(parts_ref, rest_parts)
     disp = np.linalg.norm(refined - lbs, axis=2)  # (K, V)
     # volume change refinement adds beyond LBS's own, per key (≤ 0 where it keeps volume better than LBS)
-    added = np.abs(vol_ref - 1.0) - np.abs(vol_lbs - 1.0)
+    added = change_ref - change_lbs
     return {
         **scene.info,
         "frames": int(len(refined)),
         "rest_volume_m3": round(rest, 8),
-        "volume_ratio_lbs": [round(float(x), 5) for x in vol_lbs],
-        "volume_ratio_refined": [round(float(x), 5) for x in vol_ref],
-        "max_volume_change_lbs": round(float(np.max(np.abs(vol_lbs - 1.0))), 5),
-        "max_volume_change_refined": round(float(np.max(np.abs(vol_ref - 1.0))), 5),
+        "volume_parts": int(len(rest_parts)),
+        "volume_ratio_lbs": [round(float(x), 5) for x in parts_lbs.sum(axis=1) / safe],
+        "volume_ratio_refined": [round(float(x), 5) for x in parts_ref.sum(axis=1) / safe],
+        "max_volume_change_lbs": round(float(np.max(change_lbs)), 5),
+        "max_volume_change_refined": round(float(np.max(change_ref)), 5),
         "max_volume_change_added": round(float(np.max(added)), 5),
         "max_displacement_from_lbs_m": round(float(disp.max()), 6),
         "max_displacement_from_lbs_heights": round(float(disp.max()) / max(scene.height, 1e-12), 6),
