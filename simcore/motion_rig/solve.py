@@ -20,7 +20,7 @@ from simcore.motion_rig.free_bones import (
     solve_from_clusters,
     solve_weights,
 )
-from simcore.motion_rig.hierarchy import bone_tree
+from simcore.motion_rig.hierarchy import BoneTree, bone_tree
 from simcore.motion_rig.joint_animation import joint_animation
 from simcore.motion_rig.joints import bone_pairs
 from simcore.motion_rig.sequence_weld import seam_triangles
@@ -36,6 +36,8 @@ class MotionRigParams:
     bones: a fixed bone count; None chooses it along `search_counts` (capped by `max_bones`): the first count whose
     free-bone fit reaches `target_rmse` (a share of the first frame's bounding-box diagonal), or that Dem Bones
     cannot fill, or the count before one that cuts the error by less than `min_gain`; else `max_bones`.
+    The tree's weights and transforms alternate (`refit_on_tree`) until the rig is as close as free bones, the
+    error stalls (`round_gain`, `patience`) or `rounds` run out.
     """
 
     max_influences: int = 4
@@ -51,9 +53,12 @@ class MotionRigParams:
     spread: int = 2  # 1-ring steps that make neighbouring bones' regions meet
     pivot_regularisation: float = 3e-4
     slide_mismatch: float = 0.01  # share of the diagonal: a bone pair that far from turning about a point slides
-    sweeps: int = 4  # tree transform sweeps per round
-    rounds: int = 2  # transform ↔ weight alternations on the tree
-    weight_iterations: int = 2
+    sweeps: int = 48  # at most this many tree transform sweeps per round
+    sweep_gain: float = 0.005  # a round's sweeps stop after one that cuts the squared error by less than this
+    rounds: int = 24  # at most this many weight → transform alternations on the tree
+    weight_iterations: int = 3
+    round_gain: float = 0.01  # alternations stop once `patience` rounds in a row cut the error by less than this
+    patience: int = 2
 
 
 @dataclass
@@ -122,6 +127,46 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
     return _free_fit(rest, frames, surface, chosen, params, params.iterations, start), trail
 
 
+def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, free: BoneFit, tree: BoneTree,
+                  params: MotionRigParams, free_error: float,
+                  progress: Progress) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
+    """Weights (V, B), transforms (T, B, 4, 4) and rest joints (B, 3) of the tree fitted to `frames`, and the
+    error after each round (first frame's bounding-box diagonals, over every frame and vertex).
+
+    Starts from the free bones' weights and motion with the joints carried by their parents, then alternates a
+    weight solve (Dem Bones, transforms fixed) with a connected transform and joint fit: each alternation lets
+    the weights take up what the joint constraints cost. It stops once the error reaches `free_error` (the
+    unconstrained fit at this count), after `patience` rounds in a row that gain less than `round_gain`, or after
+    `params.rounds`; the best round is kept (the weight solve's smoothing can cost a round some error).
+    """
+    diag = float(np.linalg.norm(np.ptp(frames[0], axis=0)))
+
+    def error(w: np.ndarray, m: np.ndarray) -> float:
+        return float(np.sqrt((rmse(reconstruct(rest, w, m), frames) ** 2).mean())) / diag
+
+    def transforms_for(w: np.ndarray, m: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return connected_transforms(rest, frames, w, tree.parents, j, tree.floating, m, sweeps=params.sweeps,
+                                    joint_regularisation=params.pivot_regularisation, min_gain=params.sweep_gain)
+
+    weights = free.weights[:, tree.order]
+    transforms, joints = transforms_for(weights, free.transforms[:, tree.order], tree.joints)
+    errors = [error(weights, transforms)]
+    best = (errors[0], weights, transforms, joints)
+    stalled = 0
+    for r in range(params.rounds):
+        if best[0] <= free_error or stalled >= params.patience:
+            break
+        weights = solve_weights(rest, frames, surface, BoneFit(weights, transforms),
+                                max_influences=params.max_influences, iterations=params.weight_iterations)
+        transforms, joints = transforms_for(weights, transforms, joints)
+        errors.append(error(weights, transforms))
+        stalled = stalled + 1 if errors[-1] > (1.0 - params.round_gain) * best[0] else 0
+        if errors[-1] < best[0]:
+            best = (errors[-1], weights, transforms, joints)
+        progress((r + 1) / params.rounds)
+    return best[1], best[2], best[3], [round(e, 7) for e in errors]
+
+
 def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps: float,
                     params: MotionRigParams = MotionRigParams(), progress: Progress = lambda f: None,
                     name: str = "clip") -> MotionRig:
@@ -140,23 +185,15 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     pairs = bone_pairs(rest, surface, free.weights, free.transforms, spread=params.spread,
                        pivot_regularisation=params.pivot_regularisation)
     tree = bone_tree(rest, free.weights, pairs, params.slide_mismatch * diag)
-    weights, transforms = free.weights[:, tree.order], free.transforms[:, tree.order]
-    joints = tree.joints
-    for r in range(params.rounds + 1):  # transforms, weights, ..., transforms: the last fit is the rig's motion
-        transforms, joints = connected_transforms(rest, frames, weights, tree.parents, joints, tree.floating,
-                                                  transforms, sweeps=params.sweeps,
-                                                  joint_regularisation=params.pivot_regularisation)
-        if r == params.rounds:
-            break
-        weights = solve_weights(rest, frames, surface, BoneFit(weights, transforms),
-                                max_influences=params.max_influences, iterations=params.weight_iterations)
-        progress(0.6 + 0.35 * (r + 1) / params.rounds)
+    free_error = rmse(reconstruct(rest, free.weights, free.transforms), frames) / diag
+    weights, transforms, joints, refit = refit_on_tree(rest, frames, surface, free, tree, params,
+                                                       float(np.sqrt((free_error**2).mean())),
+                                                       lambda f: progress(0.6 + 0.35 * f))
     weights = weights / np.maximum(weights.sum(axis=1, keepdims=True), 1e-12)
     names = ["root"] + [f"bone_{i:02d}" for i in range(1, len(tree.order))]
     skeleton = Skeleton(joints, tree.parents, names).validate()
     animation = joint_animation(skeleton, transforms, fps, name)
     rig_error = rmse(reconstruct(rest, weights, transforms), frames) / diag
-    free_error = rmse(reconstruct(rest, free.weights, free.transforms), frames) / diag
     report = {
         "bones": skeleton.num_joints,
         "sliding_joints": int(tree.sliding.sum()),
@@ -170,6 +207,7 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
         "free_bones_rmse_per_frame": np.round(free_error, 6).tolist(),
         "rmse_unit": "first frame's bounding-box diagonal",
         "count_search": trail,
+        "refit_rounds": refit,
         "free_bone_centres": np.round((free.weights.T @ rest) / free.weights.sum(axis=0)[:, None], 6).tolist(),
         "free_bones_seconds": round(free_seconds, 3),
         "seconds": round(time.perf_counter() - started, 3),

@@ -59,3 +59,30 @@ def test_automatic_count_stops_within_the_cap(tube):
     rig = rig_from_motion(tube.rest, tube.faces, tube.frames, tube.fps, MotionRigParams(max_bones=8, search_iterations=3, iterations=5))
     assert 2 <= rig.report["bones"] <= 8
     assert rig.report["count_search"]
+
+
+def _fit_error(tube, weights, transforms):
+    from simcore.motion_rig.free_bones import reconstruct, rmse
+
+    return float(np.sqrt((rmse(reconstruct(tube.rest, weights, transforms), tube.frames) ** 2).mean()))
+
+
+def test_tree_solve_never_ends_worse_than_it_starts_and_more_sweeps_help(tube):
+    free = solve_from_clusters(tube.rest, tube.frames, tube.faces, 4, max_influences=4, iterations=3)
+    order = np.argsort(free.weights.T @ tube.rest[:, 0] / free.weights.sum(axis=0))
+    weights, start = free.weights[:, order], free.transforms[:, order]
+    centres = (weights.T @ tube.rest) / weights.sum(axis=0)[:, None]
+    parents, floating = np.array([-1, 0, 1, 2]), np.array([True, False, False, False])
+    joints = 0.5 * (centres + centres[np.maximum(parents, 0)])  # midway to the parent: not where they belong
+    errors = []
+    for sweeps in (0, 1, 8):
+        transforms, _ = connected_transforms(tube.rest, tube.frames, weights, parents, joints, floating, start,
+                                             sweeps=sweeps, joint_regularisation=1e-4)
+        errors.append(_fit_error(tube, weights, transforms))
+    assert errors[2] <= errors[1] <= errors[0]
+    assert errors[2] < 0.8 * errors[0]
+
+
+def test_refit_rounds_end_at_their_best_round(rig):
+    rounds = rig.report["refit_rounds"]
+    assert rounds and rig.report["rmse"] == pytest.approx(min(rounds), rel=1e-3, abs=1e-6)
