@@ -7,7 +7,8 @@ with the shared parameters frozen fit only the per-frame motion of the rest; cha
 Defaults are sized for 2 CPU cores (grid 32, 3k particles, 5 iterations per phase); the flags scale to the
 paper's settings (e.g. --grid 100 --substeps 100 --material-iters 20 --velocity-iters 30 --particles 50000
 on a GPU). Ablations: --no-learn-mixing, --material-iters 0 (no material phase), --drivers virtual,
---drive velocity (the paper's open-loop integrated velocities instead of driving points aimed at per-frame anchors).
+--drive velocity (the paper's open-loop integrated velocities instead of driving points aimed at per-frame anchors),
+--no-initial-motion (the body starts at rest).
 
     rigforge fit ../shared/assets/dev/meshseq_horse.glb ../shared/assets/dev/meshseq_flamingo.glb --json out.json
 """
@@ -47,6 +48,7 @@ def fit(
     joints: Annotated[int, typer.Option(help="virtual joints, or the predicted skeleton's joints at most")] = 24,
     learn_mixing: Annotated[bool, typer.Option(help="learn prototype centres, axes and radii with E")] = True,
     drive: Annotated[str, typer.Option(help="anchored (driving points aimed at per-frame anchors) or velocity (open loop)")] = "anchored",
+    initial_motion: Annotated[bool, typer.Option(help="particles start with their joints' motion (else at rest)")] = True,
     cycles: Annotated[int, typer.Option(help="alternating cycles")] = 3,
     material_iters: Annotated[int, typer.Option(help="AdamW steps per material phase (paper: 20)")] = 5,
     velocity_iters: Annotated[int, typer.Option(help="SGD steps per frame per velocity phase (paper: 30)")] = 5,
@@ -74,7 +76,7 @@ def fit(
     config = FitConfig(grid=grid, substeps=substeps, max_particles=particles, prototypes=prototypes,
                        virtual_joints=joints, max_joints=joints, cycles=cycles, material_iters=material_iters,
                        velocity_iters=velocity_iters, velocity_lr=velocity_lr, device=device, drivers=drivers,
-                       learn_mixing=learn_mixing, drive=drive)
+                       learn_mixing=learn_mixing, drive=drive, initial_motion=initial_motion)
     protocols = ("pure", "train_test") if protocol == "both" else (protocol,)
     result: dict = {}
     for path in sequences:

@@ -26,6 +26,9 @@ the interval is the one that reaches its anchor at the interval's end (`anchors`
 fitted to that target frame) plus a fitted correction in cells; the correction is what SGD fits, and an
 interval's error is corrected by the next one instead of accumulating. The material phase treats the
 feedback as fixed within an iteration (no gradient through the driving points' start positions).
+Initial motion (`initial_motion`, our choice): a sequence rarely starts at rest, so the particles start with the
+velocity their joints' fitted motion gives them over the first interval (coarse weights of the particle's nearest
+target vertices, or the virtual joints' falloff), instead of at rest while the driving points already move.
 """
 
 from __future__ import annotations
@@ -72,6 +75,7 @@ class FitConfig:
     max_joints: int = 24  # skeleton drivers: joints of the predicted skeleton at most
     learn_mixing: bool = True  # material phase also learns prototype centres, axes and radii
     drive: str = "anchored"  # "anchored" (closed loop on per-frame anchors) or "velocity" (open loop)
+    initial_motion: bool = True  # particles start with their joints' motion over the first interval
 
 
 @dataclass
@@ -99,6 +103,7 @@ class FitScene:
     anchors: np.ndarray | None = None  # (T, D, 3) driving-point targets per frame (anchored drive)
     driver_particles: np.ndarray | None = None  # (D, EMBED) particles each driving point is embedded in
     joint_motion: tuple[np.ndarray, np.ndarray] | None = None  # per-frame joint rotations (T, M, 3, 3), translations (T, M, 3)
+    particle_weights: np.ndarray | None = None  # (N, M) the particles' weights over the joints of joint_motion
 
 
 @dataclass
@@ -139,13 +144,15 @@ def prepare_scene(targets: np.ndarray, faces: np.ndarray, fps: float, config: Fi
     _, near = cKDTree(targets[0]).query(drivers0, k=min(NEIGHBOURS, targets.shape[1]))
     velocities = np.diff(targets, axis=0)[:, near].mean(axis=2) / dx  # (T-1, D, 3) cells per frame
     rot, trans = joint_motions(targets, anchor_weights)
+    _, nearest = cKDTree(targets[0]).query(sample.positions)
+    particle_weights = anchor_weights[nearest]
     anchors = driver_anchors(rot, trans, drivers0, owners)
     _, embedded = cKDTree(sample.positions).query(drivers0, k=min(EMBED, len(sample.positions)))
     return FitScene(targets, sample.positions, sample.vertex_particles, sample.particle_volume, material.density,
                     protos, drivers0, velocities,
                     0.5 * (lo + hi), dx, grid, config.substeps, frame_dt, material.nu,
                     np.asarray(driver_centres, np.float64), joint_weights, anchors,
-                    np.asarray(embedded, np.int64).reshape(len(drivers0), -1), (rot, trans))
+                    np.asarray(embedded, np.int64).reshape(len(drivers0), -1), (rot, trans), particle_weights)
 
 
 def driver_path(scene: FitScene, velocities: np.ndarray) -> FitScene:
@@ -153,6 +160,16 @@ def driver_path(scene: FitScene, velocities: np.ndarray) -> FitScene:
     the open-loop velocities and the anchors they integrate to."""
     steps = np.concatenate([np.zeros((1,) + velocities.shape[1:]), np.cumsum(velocities, axis=0)]) * scene.dx
     return dataclasses.replace(scene, velocities=np.asarray(velocities, np.float64), anchors=scene.drivers0[None] + steps)
+
+
+def initial_velocities(scene: FitScene) -> np.ndarray:
+    """(N, 3) particle velocities over the first interval from the joints' fitted motion (zeros without one)."""
+    if scene.joint_motion is None or scene.particle_weights is None or len(scene.targets) < 2:
+        return np.zeros_like(scene.x0)
+    rot, trans = scene.joint_motion
+    w = scene.particle_weights / np.maximum(scene.particle_weights.sum(axis=1, keepdims=True), 1e-12)
+    moved = np.einsum("nm,mab,nb->na", w, rot[1], scene.x0) + w @ trans[1]
+    return (moved - scene.x0) / scene.frame_dt
 
 
 def skeleton_drivers(vertices: np.ndarray, faces: np.ndarray, dx: float,
@@ -187,6 +204,8 @@ class PhysicsFit:
         self.lam = wp.zeros(n, dtype=float, device=dev, requires_grad=True)
         self.rollout = DifferentiableRollout(self.solver, self.mu, self.lam, scene.substeps)
         self.start = self.solver.new_state(scene.x0)
+        if config.initial_motion:
+            self.start.v.assign(initial_velocities(scene).astype(np.float32))
         self.theta = np.zeros(scene.protos.count)  # LOG_E_SCALE · log(E / E_preset)
         protos = scene.protos
         # prototype geometry: centres in cells, axes as rotation vectors, log of Λ's diagonal
