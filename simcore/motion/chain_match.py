@@ -61,12 +61,13 @@ def _leaves(skeleton: Skeleton) -> np.ndarray:
     return np.flatnonzero(~has_child)
 
 
-def pair_leaves(source: Skeleton, target: Skeleton) -> tuple[list[tuple[int, int]], int]:
-    """([(target leaf, source leaf)], quarter turns k applied to the source) of the best leaf pairing."""
+def pair_leaves(source: Skeleton, target: Skeleton, turns: int | None = None) -> tuple[list[tuple[int, int]], int]:
+    """([(target leaf, source leaf)], quarter turns k applied to the source) of the best leaf pairing; `turns`
+    fixes k (skeletons known to share a frame), None tries the four."""
     ls, lt = _leaves(source), _leaves(target)
     ps, pt = normalised_rest(source), normalised_rest(target)
     results = []
-    for k in range(4):
+    for k in range(4) if turns is None else [turns]:
         rotated = ps[ls] @ quarter_turn(k).T
         cost = np.linalg.norm(pt[lt][:, None, :] - rotated[None, :, :], axis=2)
         rows, cols = linear_sum_assignment(cost)
@@ -87,9 +88,10 @@ def _arc_fraction(positions: np.ndarray, chain: list[int]) -> np.ndarray:
     return cum / cum[-1] if cum[-1] > 0 else np.linspace(0.0, 1.0, len(chain))
 
 
-def chain_mapping(source: Skeleton, target: Skeleton) -> tuple[dict[int, int], int]:
-    """(target joint → source joint, quarter turns about +Y that align the source to the target)."""
-    pairs, turns = pair_leaves(source, target)
+def chain_mapping(source: Skeleton, target: Skeleton, turns: int | None = None) -> tuple[dict[int, int], int]:
+    """(target joint → source joint, quarter turns about +Y that align the source to the target); `turns` fixes
+    the facing (None: the best fit of the four)."""
+    pairs, turns = pair_leaves(source, target, turns)
     mapping: dict[int, int] = {branch_root(target): branch_root(source)}
     for t_leaf, s_leaf in pairs:
         mapping[t_leaf] = s_leaf

@@ -38,4 +38,5 @@ def transform_clip(clip: MotionClip, scale: float, rotation: np.ndarray, transla
     rotations[:, roots] = root_rot.as_quat().reshape(t, len(roots), 4)
     translations[:, roots] = anim.translations[:, roots] * scale @ rotation.T + translation
     new_anim = JointAnimation(list(anim.joint_names), anim.fps, rotations, translations, anim.name, anim.loop)
-    return MotionClip(moved, new_anim, clip.rest_is_standing, clip.source_format, clip.unit_scale * scale, clip.unit)
+    return MotionClip(moved, new_anim, clip.rest_is_standing, clip.source_format, clip.unit_scale * scale, clip.unit,
+                      clip.shares_bind_pose)

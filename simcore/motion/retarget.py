@@ -1,13 +1,18 @@
 """Retarget a source MotionClip onto a target Skeleton.
 
 Method (world-space delta transfer):
-1. Map target joints to source joints (`map_joints`: names, else chain structure; user overrides win) and
-   find the quarter turn about +Y that makes the source face the way the target faces.
+1. Map target joints to source joints (`map_joints`: names, else chain structure, or where the bones lie for
+   two skeletons of one body; user overrides win) and
+   find the quarter turn about +Y that makes the source face the way the target faces. Of several target
+   joints on one chain mapped to one source joint, only the one nearest it bends (`one_pivot_per_source_joint`).
 2. Rest alignment: for each mapped target joint, the rotation A_j that turns its rest bone directions (to
    its nearest mapped descendants) onto the source's rest bone directions. This is what lets a T-pose
    source drive an A-pose target: at the source's rest, the target takes the source's pose. A branching
    joint (a hip) whose bones no single rotation brings near the source's is placed differently, not posed
    differently, and keeps its own rest (forcing such a joint to align would twist the whole body under it).
+   A clip whose rest is the rigged mesh's own bind pose (`MotionClip.shares_bind_pose`) needs no alignment
+   at all: both skeletons sit in one body in one pose, so every A_j is the identity and root motion is not
+   rescaled (hip heights differ only by where each skeleton put its joints).
 3. Per frame, the source joint's world delta rotation D_s = R_world(t) · R_rest⁻¹ drives the target:
    D_t = D_s · A_j; unmapped target joints ride rigidly with their parent. Target locals follow from
    D_t · R_bind (R_bind = the target's bind orientation, identity for world-aligned skeletons).
@@ -24,6 +29,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput
+from simcore.motion.body_map import fill_by_region, region_mapping
 from simcore.motion.chain_match import chain_mapping, normalised_rest, quarter_turn
 from simcore.motion.joint_map import name_mapping, skeleton_slots
 from simcore.motion.timing import resample
@@ -66,19 +72,29 @@ def _name_turns(source: Skeleton, target: Skeleton, mapping: dict[int, int]) -> 
     return int(np.argmin(errs))
 
 
-def map_joints(source: Skeleton, target: Skeleton, overrides: dict[str, str] | None = None) -> tuple[dict[int, int], str, int]:
+def map_joints(source: Skeleton, target: Skeleton, overrides: dict[str, str] | None = None,
+               same_body: bool = False) -> tuple[dict[int, int], str, int]:
     """(target index → source index, method, facing quarter turns).
 
     overrides: source joint name → target joint name; unknown names raise InvalidInput(field="motion.joint_map").
+    same_body: both skeletons were built in one mesh in one pose and frame: no quarter turn is looked for;
+    without shared names every target joint takes the source joint whose bones lie nearest its own
+    (`region_mapping`, method "regions"), with names the joints they leave unmapped do (`fill_by_region`).
     """
     by_names = name_mapping(source, target)
     t_slots = skeleton_slots(target)
     shared = {t_slots[t] for t in by_names if t_slots[t] in BODY_JOINTS or t_slots[t] in ("spine", "neck")}
     if "Hips" in shared and len(shared) >= MIN_BODY_SLOTS:
-        mapping, method, turns = by_names, "names", _name_turns(source, target, by_names)
+        mapping, method = by_names, "names"
+        turns = 0 if same_body else _name_turns(source, target, by_names)
     else:
-        mapping, turns = chain_mapping(source, target)
+        mapping, turns = chain_mapping(source, target, 0 if same_body else None)
         method = "chains"
+    if same_body and method == "chains":  # no names to go by: bones in one body pair up by where they lie
+        mapping, method = region_mapping(source, target), "regions"
+    elif same_body:
+        mapping = fill_by_region(source, target, mapping)
+    mapping = one_pivot_per_source_joint(source, target, mapping, turns, same_body)
     if overrides:
         s_index = {n: j for j, n in enumerate(source.names)}
         t_index = {n: j for j, n in enumerate(target.names)}
@@ -92,6 +108,38 @@ def map_joints(source: Skeleton, target: Skeleton, overrides: dict[str, str] | N
             mapping[t_index[t_name]] = s_index[s_name]
         method += "+overrides"
     return mapping, method, turns
+
+
+def one_pivot_per_source_joint(source: Skeleton, target: Skeleton, mapping: dict[int, int], turns: int,
+                               same_body: bool = False) -> dict[int, int]:
+    """The mapping without the chain links that would bend at the wrong place.
+
+    When several target joints on one parent chain map to the same source joint (a target with more spine or
+    clavicle joints than the source), each would turn by the source joint's rotation, so the chain would bend
+    at the shallowest of them instead of where the source bends. Only the one nearest the source joint (rest
+    positions as they are for `same_body` skeletons, else normalised with the source turned to face like the
+    target) keeps the mapping; the group's ancestors
+    above it that are plain chain links (one child) are unmapped and ride with their parents. Branching joints
+    (a hip) keep their mapping: their other branches need the rotation.
+    """
+    groups: dict[int, list[int]] = {}
+    for t, s in mapping.items():
+        groups.setdefault(s, []).append(t)
+    shared = {s: ts for s, ts in groups.items() if len(ts) > 1}
+    if not shared:
+        return mapping
+    if same_body:
+        ps, pt = source.positions, target.positions
+    else:
+        ps, pt = normalised_rest(source) @ quarter_turn(turns).T, normalised_rest(target)
+    children = target.children()
+    out = dict(mapping)
+    for s, ts in shared.items():
+        keep = min(ts, key=lambda t: float(np.linalg.norm(pt[t] - ps[s])))
+        for t in ts:
+            if len(children[t]) == 1 and _is_descendant(target.parents, keep, t):
+                del out[t]
+    return out
 
 
 def rotation_between(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -219,7 +267,8 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     options = options or MotionOptions()
     source = clip.skeleton
     anim = resample(clip.animation, options.fps, options.start, options.end)
-    mapping, method, turns = map_joints(source, target, options.joint_map)
+    same_body = clip.shares_bind_pose
+    mapping, method, turns = map_joints(source, target, options.joint_map, same_body=same_body)
     if not mapping:
         raise InvalidInput("no joint of the motion could be matched to the character's skeleton",
                            code="no_joint_map", field="motion.joint_map")
@@ -236,7 +285,8 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
 
     t_count, j_count = anim.num_frames, target.num_joints
     parents = target.parents
-    align = _rest_alignment(source, rest_s, target, mapping)
+    # One body in one pose: bones that point differently are placed differently; turning them would bend the body.
+    align = [None] * j_count if same_body else _rest_alignment(source, rest_s, target, mapping)
     bind_t = kinematics.bind_matrices(target)[:, :3, :3]
     delta_t = np.empty((t_count, j_count, 3, 3))
     inherited: list[np.ndarray] = [np.eye(3)] * j_count  # alignment in force at each joint
@@ -264,7 +314,9 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     contacts_t = _contacts(target.positions, np.flatnonzero(moving))
     contacts_s = _contacts(rest_s, np.flatnonzero(_subtree(source.parents, source_root)))
     hs, ht = _hip_height(rest_s, source_root, contacts_s), _hip_height(target.positions, motion_root, contacts_t)
-    if hs > 1e-6 and ht > 1e-6:
+    if same_body:
+        scale = 1.0  # hip heights differ only by where each skeleton put its joints
+    elif hs > 1e-6 and ht > 1e-6:
         scale = ht / hs
     else:
         scale = float(np.ptp(target.positions, axis=0).max() / max(np.ptp(rest_s, axis=0).max(), 1e-9))

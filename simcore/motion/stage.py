@@ -3,6 +3,7 @@ skeleton, set `state.animation` and write report["motion"]. Skips quietly when t
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -73,7 +74,7 @@ def clip_from_mesh_upload(state: PipelineState) -> MotionClip:
         order = [rig.skeleton.names.index(n) for n in clip.skeleton.names] if set(rig.skeleton.names) == set(clip.skeleton.names) else None
         if order is not None:
             s, r, t = similarity_fit(clip.skeleton.positions, rig.skeleton.positions[order])
-            clip = transform_clip(clip, s, r, t)
+            clip = replace(transform_clip(clip, s, r, t), shares_bind_pose=True)  # the mesh's own bind pose, in its frame
     return clip
 
 

@@ -54,6 +54,10 @@ class MotionClip:
     source_format: "bvh", "gltf", ... for the report.
     unit_scale: factor applied to the file's units to get metres.
     unit:      how unit_scale was chosen: a guessed unit name ("cm", "in", ...), "option" or "file".
+    shares_bind_pose: True when the rest pose is the bind pose of the very mesh being rigged, in that mesh's
+               frame (a clip carried by the mesh upload): the target skeleton was built on the same body in the
+               same pose, so where its bones point differently from the source's, they are placed differently,
+               not posed differently, and the retarget neither turns them at rest nor rescales root motion.
     """
 
     skeleton: Skeleton
@@ -62,3 +66,4 @@ class MotionClip:
     source_format: str = "bvh"
     unit_scale: float = 1.0
     unit: str = "file"
+    shares_bind_pose: bool = False

@@ -105,3 +105,24 @@ def test_clip_carried_by_the_mesh_upload(tmp_path, dev_assets):
     with pytest.raises(InvalidInput) as err:
         stage.run(PipelineState(state.inputs, JobOptions(motion={"clip": 7}), tmp_path, mesh=state.mesh, skeleton=state.skeleton), _progress([]))
     assert err.value.code == "unknown_clip"
+
+
+def test_clip_of_the_mesh_upload_on_an_auto_skeleton_shares_its_bind_pose(tmp_path, dev_assets):
+    """A skeleton built on the ingested mesh plays the upload's own clip: the clip is moved into the mesh's frame
+    and marked as sharing its bind pose, so root motion keeps its size (no hip-height rescaling)."""
+    from dataclasses import replace
+
+    from simcore.ingest import ingest
+    from simcore.motion.retarget import retarget
+
+    mesh = ingest((dev_assets / "fox.glb").read_bytes(), "glb")
+    assert mesh.source_rig is not None
+    state = PipelineState(PipelineInputs(tmp_path / "fox.glb", "glb"), JobOptions(motion={"clip": "Walk"}), tmp_path, mesh=mesh)
+    clip = stage.clip_from_mesh_upload(state)
+    assert clip.shares_bind_pose
+    rig = mesh.source_rig.skeleton
+    assert np.allclose(clip.skeleton.positions, rig.positions[[rig.names.index(n) for n in clip.skeleton.names]], atol=1e-4)
+    low_hips = mesh.source_rig.skeleton  # a rig of the same body with the hips 10 % lower sets the root scale otherwise
+    target = replace(low_hips, positions=low_hips.positions * [1.0, 0.9, 1.0])
+    assert retarget(clip, target).root_scale == 1.0
+    assert retarget(replace(clip, shares_bind_pose=False), target).root_scale == pytest.approx(0.9, rel=0.05)

@@ -1,0 +1,86 @@
+"""Joint mapping between two skeletons built in one body (a clip carried by the rigged mesh itself).
+
+Both skeletons sit in the same mesh in the same pose, so a target joint can take the source joint whose bones
+lie where its own bones lie: the flesh around those bones then turns with the source bone that moves it in
+the clip, whatever either hierarchy looks like (IK helpers, feet parented to a floor root, missing pelvis).
+`region_mapping` maps every joint so; `fill_by_region` only the joints a name mapping left out, among the
+source joints on the hierarchy path between the source joint of the target joint's nearest mapped ancestor
+and those of its nearest mapped descendants, so the mapping stays ordered along every chain.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from simcore.skeleton.types import Skeleton
+from simcore.skinning.bones import joint_distances, joint_segments
+
+SAMPLES = (0.25, 0.5, 0.75)  # points along each target bone compared with the source's bones
+
+
+def _is_at_or_below(parents: np.ndarray, a: int, b: int) -> bool:
+    """a is b or one of b's descendants."""
+    while a >= 0:
+        if a == b:
+            return True
+        a = int(parents[a])
+    return False
+
+
+def _region_cost(source: Skeleton, target: Skeleton) -> np.ndarray:
+    """(Jt, Js) mean distance from points along each target joint's bones to each source joint's bones."""
+    seg = joint_segments(target)
+    fractions = np.asarray(SAMPLES)[:, None, None]
+    points = (seg.heads[None] + fractions * (seg.tails - seg.heads)[None]).reshape(-1, 3)
+    owner = np.tile(seg.owner, len(SAMPLES))
+    dist = joint_distances(points, joint_segments(source), source.num_joints)  # (P, Js)
+    total = np.zeros((target.num_joints, source.num_joints))
+    np.add.at(total, owner, dist)
+    return total / np.bincount(owner, minlength=target.num_joints)[:, None]
+
+
+def _mapped_below(target: Skeleton, mapping: dict[int, int], j: int) -> list[int]:
+    """Source joints of the nearest mapped descendants of target joint j."""
+    children = target.children()
+    out, stack = [], list(children[j])
+    while stack:
+        c = stack.pop()
+        if c in mapping:
+            out.append(mapping[c])
+        else:
+            stack.extend(children[c])
+    return out
+
+
+def fill_by_region(source: Skeleton, target: Skeleton, mapping: dict[int, int]) -> dict[int, int]:
+    """`mapping` (target joint → source joint) with every unmapped target joint that has a candidate (see the
+    module docstring) mapped to the candidate whose bones lie nearest its own. Both skeletons in one frame."""
+    cost = _region_cost(source, target)
+    out = dict(mapping)
+    order = sorted(range(target.num_joints), key=lambda j: _depth(target.parents, j))  # parents first
+    for j in order:
+        if j in out:
+            continue
+        above, p = None, int(target.parents[j])
+        while p >= 0 and above is None:
+            above, p = out.get(p), int(target.parents[p])
+        below = _mapped_below(target, mapping, j)
+        candidates = [s for s in range(source.num_joints)
+                      if (above is None or _is_at_or_below(source.parents, s, above))
+                      and all(_is_at_or_below(source.parents, d, s) for d in below)]
+        if candidates and (above is not None or below):
+            out[j] = min(candidates, key=lambda s: cost[j, s])
+    return out
+
+
+def region_mapping(source: Skeleton, target: Skeleton) -> dict[int, int]:
+    """Target joint → the source joint whose bones lie nearest its own (both skeletons in one body and frame)."""
+    cost = _region_cost(source, target)
+    return {j: int(np.argmin(cost[j])) for j in range(target.num_joints)}
+
+
+def _depth(parents: np.ndarray, j: int) -> int:
+    d = 0
+    while parents[j] >= 0:
+        j, d = int(parents[j]), d + 1
+    return d

@@ -1,0 +1,87 @@
+"""Retargeting onto a skeleton built in the same body: no rest alignment, one pivot per source joint, joints
+mapped by where their bones lie."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from simcore.motion.body_map import fill_by_region
+from simcore.motion.retarget import map_joints, one_pivot_per_source_joint, retarget
+from simcore.motion.types import JointAnimation, MotionClip
+from simcore.skeleton import kinematics
+from simcore.skeleton.types import Skeleton
+
+
+def _still(skel: Skeleton, frames: int = 2) -> JointAnimation:
+    rest = np.broadcast_to(kinematics.rest_local_matrices(skel)[:, :3, 3], (frames, skel.num_joints, 3)).copy()
+    return JointAnimation(list(skel.names), 30.0, np.tile([0.0, 0.0, 0.0, 1.0], (frames, skel.num_joints, 1)), rest)
+
+
+def _world(skel: Skeleton, anim: JointAnimation) -> np.ndarray:
+    return kinematics.global_transforms(skel, kinematics.compose(anim.rotations, anim.translations))
+
+
+def _leg(foot_to_toe: list[float], hip_height: float, names: list[str]) -> Skeleton:
+    """hip → knee → ankle → toe, the toe placed at `foot_to_toe` from the ankle."""
+    hip = np.array([0.0, hip_height, 0.0])
+    pos = np.array([hip, [0.0, 0.5, 0.02], [0.0, 0.1, 0.0], np.add([0.0, 0.1, 0.0], foot_to_toe)])
+    return Skeleton(pos, np.array([-1, 0, 1, 2]), names).validate()
+
+
+def test_shared_bind_pose_keeps_the_target_rest_and_root_scale():
+    """Two rigs of one leg whose toe joints sit differently (placement, not pose): at the source's rest the
+    target stays at its own rest, and root motion is not rescaled by the hip heights' ratio."""
+    source = _leg([0.0, -0.06, 0.03], 0.95, ["a", "b", "c", "d"])  # toe steeply below the ankle
+    target = _leg([0.0, -0.03, 0.10], 0.90, ["p", "q", "r", "s"])  # toe forward
+    anim = _still(source, 3)
+    anim.translations[:, 0] += np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.5], [0.0, 0.0, 1.0]])  # walks 1 m along +Z
+    clip = MotionClip(source, anim, rest_is_standing=True, source_format="test")
+    overrides = {"a": "p", "b": "q", "c": "r", "d": "s"}
+    from simcore.options import MotionOptions
+
+    shared = retarget(replace(clip, shares_bind_pose=True), target, MotionOptions(joint_map=overrides))
+    world = _world(target, shared.animation)
+    assert np.allclose(world[:, :, :3, :3], np.eye(3), atol=1e-9)  # nothing turned
+    assert shared.root_scale == 1.0
+    assert np.allclose(world[:, 0, 2, 3], [0.0, 0.5, 1.0], atol=1e-9)
+    # Without the flag the ankle is turned at rest to point the foot like the source's (what bent the ankles).
+    aligned = _world(target, retarget(clip, target, MotionOptions(joint_map=overrides)).animation)
+    assert not np.allclose(aligned[0, 2, :3, :3], np.eye(3), atol=1e-3)
+
+
+def _strip(ys: list[float], prefix: str) -> Skeleton:
+    pos = np.array([[0.0, y, 0.0] for y in ys])
+    return Skeleton(pos, np.arange(len(ys)) - 1, [f"{prefix}{k}" for k in range(len(ys))]).validate()
+
+
+def test_region_mapping_bends_where_the_source_bends():
+    """A two-joint source bending at y = 1 and a five-joint target along the same strip: the target joint at the
+    bend takes the source's second joint; the target leaf alone would bend the strip half a unit too high."""
+    source, target = _strip([0.0, 1.0], "s"), _strip([0.5, 0.75, 1.01, 1.26, 1.5], "t")
+    mapping = fill_by_region(source, target, {0: 0, 4: 1})
+    assert mapping == {0: 0, 1: 0, 2: 1, 3: 1, 4: 1}
+    # Each shared source joint's nearest target joint is the shallowest of its group: nothing to drop.
+    assert one_pivot_per_source_joint(source, target, mapping, 0, same_body=True) == mapping
+    frames = 2
+    rot = np.tile([0.0, 0.0, 0.0, 1.0], (frames, 2, 1))
+    rot[1, 1] = Rotation.from_rotvec([0.0, 0.0, np.pi / 2]).as_quat()
+    anim = JointAnimation(["s0", "s1"], 30.0, rot, np.broadcast_to(kinematics.rest_local_matrices(source)[:, :3, 3], (frames, 2, 3)).copy())
+    clip = MotionClip(source, anim, rest_is_standing=True, source_format="test", shares_bind_pose=True)
+    out = retarget(clip, target)
+    pos = _world(target, out.animation)[1, :, :3, 3]
+    assert np.allclose(pos[:3], target.positions[:3], atol=1e-9)  # below the bend nothing moves
+    assert pos[4, 0] == pytest.approx(-(1.5 - 1.01), abs=1e-9)  # above it the strip turns about the joint at 1.01
+
+
+def test_clavicle_mapped_with_the_arm_stays_with_the_chest():
+    """Shoulder and arm joints of the target both on the source's arm joint: only the arm turns with it."""
+    source = Skeleton(np.array([[0.0, 1.0, 0.0], [0.2, 1.0, 0.0], [0.5, 1.0, 0.0]]), np.array([-1, 0, 1]),
+                      ["chest", "arm", "hand"]).validate()
+    target = Skeleton(np.array([[0.0, 1.0, 0.0], [0.05, 1.0, 0.0], [0.19, 1.0, 0.0], [0.5, 1.0, 0.0]]),
+                      np.array([-1, 0, 1, 2]), ["t_chest", "t_clav", "t_arm", "t_hand"]).validate()
+    assert one_pivot_per_source_joint(source, target, {0: 0, 1: 1, 2: 1, 3: 2}, 0) == {0: 0, 2: 1, 3: 2}
+    assert map_joints(source, target)[0].get(1) != 1  # as the structural mapping gives it
