@@ -22,30 +22,37 @@ def _fmt(value: float | None, digits: int) -> str:
     return "-" if value is None else f"{value:.{digits}f}"
 
 
+def _volume(low: float | None, high: float | None) -> str:
+    return "-" if low is None or high is None else f"{low:.3f}–{high:.3f}"
+
+
 def render(report: MotionEvaluation, console: Console) -> None:
     """One row per character × rig (artist self-check, ours), then the means."""
     from simcore.evaluation.motion_eval import STRETCH_BOUND
 
     table = Table(title="Own clips retargeted artist rig → rig, LBS vertex error in unit-cube units; edge stretch "
-                        "(length / bind length) ours and the artist rig's on the same clip; "
+                        "(length / bind length) ours and the artist rig's on the same clip (the artist's deviation floored at "
+                        "`floor`); enclosed volume / bind volume, lowest–highest frame; "
                         "CMU 01_01 mocap foot sliding in heights/s")
     for head in ("asset", "category", "rig", "clip", "frames", "joints", "mapped", "map"):
         table.add_column(head)
-    for head in ("err mean", "err p95", "stretch p1", "stretch p99", "artist p1", "artist p99", "× artist",
-                 "mocap slide", "contact", "s"):
+    for head in ("err mean", "err p95", "stretch p1", "stretch p99", "artist p1", "artist p99", "floor", "× artist",
+                 "volume", "artist volume", "mocap slide", "contact", "s"):
         table.add_column(head, justify="right")
     for r in report.rows:
         cells = [r.name, r.category, r.target, r.clip, str(r.frames), str(r.joints), str(r.mapped), r.method]
         if r.error:
-            table.add_row(*cells, "error", *[""] * 8, _fmt(r.seconds, 1))
+            table.add_row(*cells, "error", *[""] * 11, _fmt(r.seconds, 1))
             continue
         ratio = _fmt(r.stretch_ratio, 2) + ("" if r.within_bound is not False else " ✗")
         table.add_row(*cells, _fmt(r.vertex_error, 4), _fmt(r.vertex_error_p95, 4), _fmt(r.stretch_low, 3),
-                      _fmt(r.stretch_high, 3), _fmt(r.artist_stretch_low, 3), _fmt(r.artist_stretch_high, 3), ratio,
-                      _fmt(r.mocap_sliding, 4), _fmt(r.mocap_contact, 3), _fmt(r.seconds, 1))
+                      _fmt(r.stretch_high, 3), _fmt(r.artist_stretch_low, 3), _fmt(r.artist_stretch_high, 3),
+                      _fmt(r.deviation_floor, 3), ratio, _volume(r.volume_low, r.volume_high),
+                      _volume(r.artist_volume_low, r.artist_volume_high), _fmt(r.mocap_sliding, 4), _fmt(r.mocap_contact, 3),
+                      _fmt(r.seconds, 1))
     for target in ("artist", "ours"):
         table.add_row("MEAN", "", target, "", "", "", "", "", _fmt(report.mean(target, "vertex_error"), 4),
-                      _fmt(report.mean(target, "vertex_error_p95"), 4), *[""] * 5, _fmt(report.mean(target, "mocap_sliding"), 4),
+                      _fmt(report.mean(target, "vertex_error_p95"), 4), *[""] * 8, _fmt(report.mean(target, "mocap_sliding"), 4),
                       "", "", style="bold")
     print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.target}: {r.error}" for r in report.rows if r.error))
     within, measured = report.bound_counts()

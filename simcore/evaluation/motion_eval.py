@@ -11,7 +11,11 @@ For every rigged .glb/.gltf in DIR that carries animation clips (loader stress t
 - stretch: over every frame of the clip, the lowest 1st and highest 99th percentile of edge length / bind
   length (as the quality gate measures a job), for our rig and for the artist's rig playing the same clip;
   `stretch_ratio` is our deviation from 1 over the artist's, the worse tail, and issue 25 bounds it by
-  STRETCH_BOUND on every character × clip. Every clip of a character is evaluated.
+  STRETCH_BOUND on every character × clip. Every clip of a character is evaluated. The artist's deviation is
+  floored (`deviation_floor`) at what a median-length edge of the mesh shows when its length changes by one
+  pixel of a view that frames the whole character 1000 pixels high (PIXEL × the model size), and at least
+  MIN_DEVIATION: an artist rig of rigid parts stretches nothing, and a ratio to zero would make any smooth
+  skinning fail however invisible its stretch. Volume: lowest and highest enclosed volume / bind volume.
 Humanoids also get `mocap_cmu_01_01.bvh` retargeted at 30 fps and their soles' sliding speed while in
 contact, for our rig and (as a reference measured in the same run) the artist's rig.
 """
@@ -20,7 +24,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +33,8 @@ import scipy.sparse as sp
 
 from simcore.errors import SimcoreError
 from simcore.evaluation.assets import rigged_assets
-from simcore.gate.measures import deformation_series, lbs_blocks
+from simcore.gate.measures import deformation_series, lbs_blocks, model_size
+from simcore.geometry.laplacian import edges
 from simcore.io.bvh import parse_bvh
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset
@@ -47,6 +52,7 @@ MOCAP = "mocap_cmu_01_01.bvh"
 MAX_FRAMES = 60
 STRETCH_BOUND = 1.15  # our stretch deviation / the artist rig's on the same clip, at most (issue 25)
 MIN_DEVIATION = 0.01  # an artist rig that stretches less than 1 % is compared with 1 %: no ratio of two near-zeros
+PIXEL = 1e-3  # × the model size: one pixel of a view framing the whole character 1000 pixels high
 
 
 @dataclass
@@ -69,6 +75,11 @@ class MotionRow:
     stretch_high: float | None = None  # highest per-frame 99th percentile
     artist_stretch_low: float | None = None  # the same for the artist's rig playing the same clip
     artist_stretch_high: float | None = None
+    volume_low: float | None = None  # lowest per-frame enclosed volume / bind volume (None: the mesh encloses none)
+    volume_high: float | None = None
+    artist_volume_low: float | None = None
+    artist_volume_high: float | None = None
+    deviation_floor: float = MIN_DEVIATION  # the least artist deviation a ratio divides by (see the module docstring)
     seconds: float = 0.0
     error: str | None = None
 
@@ -77,8 +88,9 @@ class MotionRow:
         """Our deviation from rest length over the artist rig's on the same clip, the worse of the two tails."""
         if self.stretch_low is None or self.stretch_high is None or self.artist_stretch_low is None or self.artist_stretch_high is None:
             return None
-        low = (1.0 - self.stretch_low) / max(1.0 - self.artist_stretch_low, MIN_DEVIATION)
-        high = (self.stretch_high - 1.0) / max(self.artist_stretch_high - 1.0, MIN_DEVIATION)
+        floor = max(self.deviation_floor, MIN_DEVIATION)
+        low = (1.0 - self.stretch_low) / max(1.0 - self.artist_stretch_low, floor)
+        high = (self.stretch_high - 1.0) / max(self.artist_stretch_high - 1.0, floor)
         return float(max(low, high))
 
     @property
@@ -129,17 +141,34 @@ def world_bind(doc: GltfDocument, asset: RiggedAsset, clip: MotionClip) -> tuple
     scale = 0.01 if np.ptp(v, axis=0).max() > 20.0 else 1.0
     if scale != 1.0:
         clip = transform_clip(clip, scale, np.eye(3), np.zeros(3))
-    return v * scale, clip
+    return v * scale, replace(clip, shares_bind_pose=True)  # as a job playing the mesh upload's own clip
 
 
 def _frames(n: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, min(n, MAX_FRAMES)).astype(np.int64))
 
 
-def _stretch(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix, mats: np.ndarray) -> tuple[float, float]:
-    """(lowest 1st, highest 99th) per-frame percentile of edge stretch of LBS under mats (T, J, 4, 4)."""
+def deviation_floor(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The least artist stretch deviation a ratio divides by: a median-length edge of the (V, 3), (F, 3) mesh
+    changing its length by PIXEL × the model size, and at least MIN_DEVIATION."""
+    e = edges(faces)
+    length = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
+    length = length[length > 0]
+    if not len(length):
+        return MIN_DEVIATION
+    return float(max(MIN_DEVIATION, PIXEL * model_size(vertices) / np.median(length)))
+
+
+Deformation = tuple[float, float, float | None, float | None]
+
+
+def _deformation(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix, mats: np.ndarray) -> Deformation:
+    """(lowest 1st, highest 99th per-frame percentile of edge stretch, lowest, highest volume ratio) of LBS under
+    mats (T, J, 4, 4); the volumes are None when the bind mesh encloses none."""
     series = deformation_series(vertices, faces, lbs_blocks(vertices, weights, mats))
-    return float(series.stretch_low.min()), float(series.stretch_high.max())
+    vol = series.volume_ratio
+    low, high = (None, None) if vol is None or not len(vol) else (float(vol.min()), float(vol.max()))
+    return float(series.stretch_low.min()), float(series.stretch_high.max()), low, high
 
 
 def _clip_error(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artist_w: sp.csr_matrix, target: Skeleton,
@@ -153,8 +182,10 @@ def _clip_error(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artis
     ours = linear_blend(vertices, weights, our_mats[keep])
     dist = np.linalg.norm(ours - reference, axis=2) / np.ptp(vertices, axis=0).max()
     row.vertex_error, row.vertex_error_p95 = float(dist.mean()), float(np.percentile(dist, 95))
-    row.stretch_low, row.stretch_high = _stretch(vertices, faces, weights, our_mats)
-    row.artist_stretch_low, row.artist_stretch_high = _stretch(vertices, faces, artist_w, artist_mats)
+    row.stretch_low, row.stretch_high, row.volume_low, row.volume_high = _deformation(vertices, faces, weights, our_mats)
+    row.artist_stretch_low, row.artist_stretch_high, row.artist_volume_low, row.artist_volume_high = _deformation(
+        vertices, faces, artist_w, artist_mats)
+    row.deviation_floor = deviation_floor(vertices, faces)
     return result
 
 

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from simcore.evaluation.motion_eval import STRETCH_BOUND, MotionRow, evaluate_motion
+from simcore.evaluation.motion_eval import MIN_DEVIATION, STRETCH_BOUND, MotionRow, deviation_floor, evaluate_motion
 
 
 def test_artist_rig_self_check_is_exact_on_every_clip(dev_assets):
@@ -26,3 +27,24 @@ def test_the_stretch_ratio_is_our_deviation_over_the_artists_on_the_worse_tail()
     assert row.stretch_ratio == pytest.approx(0.5 / 0.4) and row.within_bound is (0.5 / 0.4 <= STRETCH_BOUND)
     rigid = MotionRow("b", "other", "ours", stretch_low=0.995, stretch_high=1.004, artist_stretch_low=1.0, artist_stretch_high=1.0)
     assert rigid.stretch_ratio == pytest.approx(0.5) and rigid.within_bound  # a rigid artist clip is compared with 1 %
+
+
+def _grid(n: int, size: float) -> tuple[np.ndarray, np.ndarray]:
+    """An n × n vertex grid over a size × size square, two triangles per cell."""
+    x, y = np.meshgrid(np.linspace(0.0, size, n), np.linspace(0.0, size, n))
+    v = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], axis=1)
+    k = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
+    return v, np.concatenate([np.stack([k, k + 1, k + n], 1), np.stack([k + 1, k + n + 1, k + n], 1)])
+
+
+def test_the_artist_deviation_is_floored_at_a_pixel_of_a_median_edge():
+    """A dense mesh's edges are short: one pixel (1/1000 of the model size) is a 10 % change of a 1 cm edge on a
+    1 m mesh, so a rigid artist rig is compared with 10 %; coarse meshes keep the 1 % floor."""
+    dense, coarse = _grid(101, 1.0), _grid(5, 1.0)
+    assert deviation_floor(*dense) == pytest.approx(0.1)
+    assert deviation_floor(*coarse) == MIN_DEVIATION
+    rigid = MotionRow("b", "other", "ours", stretch_low=0.95, stretch_high=1.08, artist_stretch_low=1.0, artist_stretch_high=1.0,
+                      deviation_floor=deviation_floor(*dense))
+    assert rigid.stretch_ratio == pytest.approx(0.8) and rigid.within_bound
+    rigid.deviation_floor = deviation_floor(*coarse)
+    assert rigid.stretch_ratio == pytest.approx(8.0) and not rigid.within_bound
