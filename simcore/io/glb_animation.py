@@ -160,7 +160,8 @@ def add_morph_animation(builder: GlbBuilder, clip: dict, slices: list, offsets: 
             rows = compact.residual_rows[i]
             inside = (rows >= lo) & (rows < hi)
             targets.append({"POSITION": _quantized_sparse(builder, s.count, rows[inside] - lo, q[inside], q.dtype)})
-        prim["targets"] = prim.get("targets", []) + targets
+        if targets:
+            prim["targets"] = prim.get("targets", []) + targets
     names = [f"refine_basis_{j}" for j in range(rank)] + [f"frame_{int(frames[i])}" for i in residual_keys]
     weights = np.zeros((k, rank + len(residual_keys)), np.float32)
     weights[:, :rank] = compact.coefficients * np.array([sc for _, sc in basis_q])[None]
@@ -168,7 +169,7 @@ def add_morph_animation(builder: GlbBuilder, clip: dict, slices: list, offsets: 
         weights[i, rank + col] = scale
     interpolation = "STEP" if k == frame_count else "LINEAR"
     times = np.asarray(frames) / float(fps)
-    for m in sorted({s.mesh for s in slices}):
+    for m in sorted({s.mesh for s in slices}) if weights.shape[1] else []:  # no offsets at all: no channel
         own = [float(w) for w in meshes[m].get("weights", [])]
         own_names = meshes[m].get("extras", {}).get("targetNames", [])  # ingest names every upload target
         meshes[m]["weights"] = own + [0.0] * weights.shape[1]

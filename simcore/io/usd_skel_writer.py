@@ -187,7 +187,8 @@ def _define_refinement(stage, meshes: list, layout: MeshLayout, skeleton: Skelet
     size = float(np.ptp(layout.vertices, axis=0).max()) if len(layout.vertices) else 0.0
     compact = compact_offsets(offsets, (TOLERANCE if tolerance is None else tolerance) * size,
                               BLEND_BASIS_VERTEX_BYTES, BLEND_RESIDUAL_VERTEX_BYTES)
-    names = [f"refine_basis_{j}" for j in range(compact.rank)] + [f"refine_frame_{int(f)}" for f in keys]
+    with_residual = [i for i in range(len(keys)) if len(compact.residual_rows[i])]
+    names = [f"refine_basis_{j}" for j in range(compact.rank)] + [f"refine_frame_{int(keys[i])}" for i in with_residual]
     for mesh, rows in meshes:
         binding = UsdSkel.BindingAPI(mesh.GetPrim())
         given = list(binding.GetBlendShapesAttr().Get() or [])
@@ -197,12 +198,12 @@ def _define_refinement(stage, meshes: list, layout: MeshLayout, skeleton: Skelet
             shape.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(compact.basis[j, rows])))
             given.append(names[j])
             targets.append(Sdf.Path(shape.GetPath()))
-        for i in range(len(keys)):
+        for col, i in enumerate(with_residual):
             r = compact.residual_rows[i]
             inside = (r >= rows.start) & (r < rows.stop)
             if not inside.any():
                 continue
-            name = names[compact.rank + i]
+            name = names[compact.rank + col]
             shape = UsdSkel.BlendShape.Define(stage, mesh.GetPath().AppendChild(name))
             shape.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(compact.residual_values[i][inside])))
             shape.CreatePointIndicesAttr(Vt.IntArray.FromNumpy((r[inside] - rows.start).astype(np.int32)))
@@ -210,11 +211,13 @@ def _define_refinement(stage, meshes: list, layout: MeshLayout, skeleton: Skelet
             targets.append(Sdf.Path(shape.GetPath()))
         binding.CreateBlendShapesAttr(given)
         binding.CreateBlendShapeTargetsRel().SetTargets(targets)
+    if not names:  # no offsets at all
+        return
     anim = UsdSkel.Animation.Get(stage, f"{ROOT}/Animation")
     anim.CreateBlendShapesAttr(names)
     weights = np.zeros((len(keys), len(names)), np.float32)
     weights[:, :compact.rank] = compact.coefficients
-    weights[np.arange(len(keys)), compact.rank + np.arange(len(keys))] = 1.0
+    weights[with_residual, compact.rank + np.arange(len(with_residual))] = 1.0
     attr = anim.CreateBlendShapeWeightsAttr()
     for i, f in enumerate(keys):
         attr.Set(Vt.FloatArray.FromNumpy(weights[i]), float(f))

@@ -125,3 +125,12 @@ def test_refined_frames_need_an_animation(rig):
     glb, mesh, skeleton, weights, _ = rig
     with pytest.raises(Exception, match="animation"):
         write_rigged_glb(glb, skeleton, weights, morph_frames=np.zeros((2, len(mesh.vertices), 3)))
+
+
+def test_refinement_equal_to_lbs_writes_no_targets(rig, tmp_path):
+    glb, mesh, skeleton, weights, animation = rig
+    lbs = linear_blend(mesh.vertices, weights, joint_tracks(skeleton, animation).skin_matrices(skeleton))
+    path = tmp_path / "refined.glb"
+    export = write_rigged_glb(glb, skeleton, weights, animation=animation, morph_frames=lbs, out_path=path)
+    assert export.stats["morph"]["targets"] == 0
+    assert validate_gltf_file(path).errors == 0

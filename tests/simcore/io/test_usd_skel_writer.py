@@ -126,3 +126,13 @@ def test_checker_reports_missing_stage_metadata(tmp_path):
     stage.GetRootLayer().Export(str(tmp_path / "bare.usda"))
     result = validate_usd_file(tmp_path / "bare.usda")
     assert not result.ok and any("upAxis" in e for e in result.errors)
+
+
+def test_refinement_equal_to_lbs_adds_no_blend_shapes(rig, tmp_path):
+    from pxr import Usd, UsdSkel
+
+    glb, mesh, skeleton, weights, animation = rig
+    lbs = linear_blend(mesh.vertices, weights, joint_tracks(skeleton, animation).skin_matrices(skeleton))
+    path = write_usd_skel(glb, skeleton, weights, tmp_path / "refined.usdc", animation=animation, refined_frames=lbs)[0]
+    assert validate_usd_file(path).ok
+    assert not [p for p in Usd.Stage.Open(str(path)).Traverse() if p.IsA(UsdSkel.BlendShape)]
