@@ -135,4 +135,5 @@ def test_refinement_equal_to_lbs_adds_no_blend_shapes(rig, tmp_path):
     lbs = linear_blend(mesh.vertices, weights, joint_tracks(skeleton, animation).skin_matrices(skeleton))
     path = write_usd_skel(glb, skeleton, weights, tmp_path / "refined.usdc", animation=animation, refined_frames=lbs)[0]
     assert validate_usd_file(path).ok
-    assert not [p for p in Usd.Stage.Open(str(path)).Traverse() if p.IsA(UsdSkel.BlendShape)]
+    stage = Usd.Stage.Open(str(path))
+    assert not [p for p in stage.Traverse() if p.IsA(UsdSkel.BlendShape)]
