@@ -2,12 +2,13 @@
 
 Each file goes through exactly what a job runs: the job's ingest (units, up axis, rest pose) and its skeleton
 prediction (`simcore.skeleton.stage.predict_for_job`, ground plane left out), with default options and the
-given method, so a figure here is what a user gets. Ground truth = the upload's skin joints that influence a
-vertex (or have a descendant that does), at the rest pose the job sees, in the job's frame; `simcore.metrics.
-skeleton` scores against the ingested mesh. Files without a skin (e.g. morph-target sequences) are listed as
-skipped; a file that fails to load is skipped with its reason, never an aborted run. Categories come from
-DIR/MANIFEST.tsv (`name` or `file` column → `category`) when present, else "unknown". The ground-truth
-skeletons' token counts (naive vs optimised UniRig tokenisation) are reported alongside.
+given method, so a figure here is what a user gets. Ground truth = the joints of every skin in the upload
+(simcore.io.gltf_rig: their union, one tree) that influence a vertex (or have a descendant that does), at the
+rest pose the job sees, in the job's frame; `simcore.metrics.skeleton` scores against the ingested mesh. Files
+without a skin (e.g. morph-target sequences) are listed as skipped; a file that fails to load is skipped with its
+reason, never an aborted run. Categories come from DIR/MANIFEST.tsv (`name` or `file` column → `category`) when
+present, else "unknown". The ground-truth skeletons' token counts (naive vs optimised UniRig tokenisation) are
+reported alongside.
 
 `all` runs the voxel baseline and `auto` once, and also scores the best candidate of each method `auto` chose
 among (humanoid, geometric, thinning, learned): the same skeletons those methods give as job options.

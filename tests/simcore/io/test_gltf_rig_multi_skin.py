@@ -239,3 +239,12 @@ def test_job_ingest_weights_every_vertex_of_every_skin() -> None:
     assert mesh.source_rig.skeleton.num_joints == 4
     sums = np.asarray(mesh.source_rig.weights.sum(axis=1)).ravel()
     np.testing.assert_allclose(sums, 1.0, atol=1e-5)
+
+
+def test_skeleton_eval_ground_truth_holds_every_skin(tmp_path) -> None:
+    from simcore.evaluation.skeleton_eval import load_case
+
+    path = tmp_path / "wolf_and_rider.gltf"
+    path.write_bytes(_two_characters_file()[0])
+    case = load_case(path)
+    assert sorted(case.gt.names) == ["rider", "rider_head", "tail", "wolf"]
