@@ -39,18 +39,21 @@ def _subtrees(parents: np.ndarray) -> list[np.ndarray]:
 
 def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarray, parents: np.ndarray,
                          joints: np.ndarray, floating: np.ndarray, start: np.ndarray, *, sweeps: int,
-                         joint_regularisation: float, min_gain: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                         joint_regularisation: float, min_gain: float = 0.0,
+                         anchors: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(T, B, 4, 4) rigid transforms with each bone's joint carried by its parent in every frame, and the
     re-fitted (B, 3) rest joints: the sweep (or the start) of least squared error over every frame and vertex.
 
     rest: (V, 3) bind pose; frames: (T, V, 3); weights: (V, B) rows summing to 1; parents: (B,) parents first,
     root -1; joints: (B, 3) rest joints; floating: (B,) bool bones whose joint moves freely (the root's);
     start: (T, B, 4, 4) transforms whose rotations (and floating bones' translations) seed the fit;
-    joint_regularisation: per-frame pull of a joint towards where it is, for directions the motion leaves open.
+    joint_regularisation: per-frame pull of a joint towards its anchor (`anchors` (B, 3), default the given
+    joints), which decides the directions the motion leaves open (along a hinge's axis) so joints do not drift.
     sweeps: at most this many; they stop after one that cuts the squared error by less than `min_gain` (a share).
     """
     count, steps = weights.shape[1], frames.shape[0]
     joints = joints.copy()
+    anchors = joints.copy() if anchors is None else anchors
     rot = start[:, :, :3, :3].copy()
     trans = start[:, :, :3, 3].copy()
 
@@ -92,7 +95,8 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
             lever = rot[:, parents[b]] - rot[:, b]  # (T, 3, 3)
             lhs = (np.einsum("tki,tkj->ij", lever, lever) * share_gram[b, b]
                    + joint_regularisation * steps * np.eye(3))
-            step = np.linalg.solve(lhs, np.einsum("tki,tk->i", lever, pull[b]))
+            rhs = np.einsum("tki,tk->i", lever, pull[b]) + joint_regularisation * steps * (anchors[b] - joints[b])
+            step = np.linalg.solve(lhs, rhs)
             shift = lever @ step  # (T, 3)
             joints[b] += step
             shifts[b] = shift

@@ -20,6 +20,8 @@ class BoneTree:
     floating:  (B,) bool bones whose joint moves freely (an animated offset from the parent): the root, bones of a
                mesh part that touches no other bone (hung from the nearest bone, at their own centre), and bones
                whose motion has no pivot with their parent's (`sliding`: the joint at that pair's best point).
+    borders:   (B, 3) float64 centre of each bone's border with its parent (the root's, a separate part's: its
+               vertices' centre): a point inside the surface near the joint.
     """
 
     order: np.ndarray
@@ -27,6 +29,7 @@ class BoneTree:
     joints: np.ndarray
     floating: np.ndarray
     sliding: np.ndarray
+    borders: np.ndarray
 
 
 def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: float) -> BoneTree:
@@ -67,7 +70,8 @@ def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: fl
     index = {bone: i for i, bone in enumerate(order)}
     pivot_of = {(int(x), int(y)): p for (x, y), p, m in zip(pairs.pairs, pairs.pivots, pairs.mismatch) if m <= slide}
     best = {(int(x), int(y)): p for (x, y), p in zip(pairs.pairs, pairs.pivots)}
-    joints = np.empty((count, 3))
+    border = {(int(x), int(y)): c for (x, y), c in zip(pairs.pairs, pairs.borders)}
+    joints, borders = np.empty((count, 3)), np.empty((count, 3))
     floating, sliding = np.zeros(count, bool), np.zeros(count, bool)
     for i, bone in enumerate(order):
         up = parent_of[bone]
@@ -75,5 +79,6 @@ def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: fl
         floating[i] = key not in pivot_of
         sliding[i] = up >= 0 and key in best and key not in pivot_of
         joints[i] = pivot_of.get(key, best.get(key, centres[bone]))
+        borders[i] = border.get(key, centres[bone])
     parents = np.array([index[parent_of[bone]] if parent_of[bone] >= 0 else -1 for bone in order], np.int64)
-    return BoneTree(np.asarray(order, np.int64), parents, joints, floating, sliding)
+    return BoneTree(np.asarray(order, np.int64), parents, joints, floating, sliding, borders)

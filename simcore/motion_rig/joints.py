@@ -17,12 +17,14 @@ class BonePairs:
     mismatch: (P,) float64 RMS over frames of the distance between that point carried by either bone (metres):
               near zero for a true joint, large for bones that only touch.
     overlap:  (P,) float64 how much skinning the two bones share around their border (vertex-weight products).
+    borders:  (P, 3) float64 centre of the pair's border (the overlap-weighted mean of the vertices there).
     """
 
     pairs: np.ndarray
     pivots: np.ndarray
     mismatch: np.ndarray
     overlap: np.ndarray
+    borders: np.ndarray
 
 
 def _vertex_adjacency(faces: np.ndarray, count: int) -> sp.csr_matrix:
@@ -62,4 +64,4 @@ def bone_pairs(rest: np.ndarray, faces: np.ndarray, weights: np.ndarray, transfo
     pivots = np.linalg.solve(lhs, rhs[..., None])[..., 0]
     gap = np.einsum("tpij,pj->tpi", da, pivots) + db
     mismatch = np.sqrt((gap**2).sum(-1).mean(0))
-    return BonePairs(pairs, pivots, mismatch, share[a_idx, b_idx])
+    return BonePairs(pairs, pivots, mismatch, share[a_idx, b_idx], centres)

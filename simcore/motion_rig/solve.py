@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
+from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.motion.types import JointAnimation
 from simcore.motion_rig.connected_solve import connected_transforms
 from simcore.motion_rig.free_bones import (
@@ -24,6 +25,7 @@ from simcore.motion_rig.hierarchy import BoneTree, bone_tree
 from simcore.motion_rig.joint_animation import joint_animation
 from simcore.motion_rig.joints import bone_pairs
 from simcore.motion_rig.sequence_weld import seam_triangles
+from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.types import Skeleton
 
 Progress = Callable[[float], None]
@@ -35,7 +37,8 @@ class MotionRigParams:
 
     bones: a fixed bone count; None chooses it along `search_counts` (capped by `max_bones`): the first count whose
     free-bone fit reaches `target_rmse` (a share of the first frame's bounding-box diagonal), or that Dem Bones
-    cannot fill, or the count before one that cuts the error by less than `min_gain`; else `max_bones`.
+    cannot fill, or the count before one that cuts the error by less than `min_gain` (when that count's error is
+    below `usable_rmse`: a flat stretch of a curve still far off is a solver that stalls); else `max_bones`.
     The tree's weights and transforms alternate (`refit_on_tree`) until the rig is as close as free bones, the
     error stalls (`round_gain`, `patience`) or `rounds` run out.
     """
@@ -45,6 +48,7 @@ class MotionRigParams:
     max_bones: int = 64
     target_rmse: float = 0.0005
     min_gain: float = 0.15
+    usable_rmse: float = 0.01  # a flattening curve ends the search only at a count whose error is below this
     kmeans_margin: float = 0.5  # k-means start kept when its search error is below this share of Dem Bones' own
     search_counts: tuple[int, ...] = (4, 8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
     search_frames: int = 12  # frames (evenly spread) the count search fits
@@ -57,6 +61,7 @@ class MotionRigParams:
     sweep_gain: float = 0.005  # a round's sweeps stop after one that cuts the squared error by less than this
     rounds: int = 24  # at most this many weight → transform alternations on the tree
     weight_iterations: int = 3
+    inside_resolution: int = 64  # voxels along the longest side of the solid that joints are moved into
     round_gain: float = 0.01  # alternations stop once `patience` rounds in a row cut the error by less than this
     patience: int = 2
 
@@ -115,7 +120,7 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
         fit, error = tried[best], errors[best]
         trail.append({"bones": fit.num_bones, "asked": count, "rmse": round(error, 6), "start": best})
         progress(0.5 * (i + 1) / len(counts))
-        if before is not None and error > (1.0 - params.min_gain) * before[1]:
+        if before is not None and error > (1.0 - params.min_gain) * before[1] and before[1] <= params.usable_rmse:
             chosen, start = before[0], before[3]  # the curve has flattened: more bones fit detail, not joints
             break
         if error <= params.target_rmse or (before is not None and fit.num_bones <= before[2]):
@@ -125,6 +130,20 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
     else:
         start = before[3] if before is not None else "split"
     return _free_fit(rest, frames, surface, chosen, params, params.iterations, start), trail
+
+
+def joints_inside(grid: VoxelGrid, tree: BoneTree) -> np.ndarray:
+    """(B, 3) the tree's joints with those outside the solid moved in: to the bone's border with its parent when
+    that is inside, else to the nearest inside voxel. A pivot read off a small relative motion can lie far out
+    (the motion barely decides it); the re-fit's joint steps start there and are pulled back there."""
+    joints = tree.joints.copy()
+    outside = ~grid.inside(joints)
+    border = outside & grid.inside(tree.borders)
+    joints[border] = tree.borders[border]
+    rest = outside & ~border
+    if rest.any():
+        joints[rest] = snap_inside(grid, joints[rest])
+    return joints
 
 
 def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, free: BoneFit, tree: BoneTree,
@@ -146,7 +165,8 @@ def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, fre
 
     def transforms_for(w: np.ndarray, m: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return connected_transforms(rest, frames, w, tree.parents, j, tree.floating, m, sweeps=params.sweeps,
-                                    joint_regularisation=params.pivot_regularisation, min_gain=params.sweep_gain)
+                                    joint_regularisation=params.pivot_regularisation, min_gain=params.sweep_gain,
+                                    anchors=tree.joints)
 
     weights = free.weights[:, tree.order]
     transforms, joints = transforms_for(weights, free.transforms[:, tree.order], tree.joints)
@@ -185,6 +205,9 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     pairs = bone_pairs(rest, surface, free.weights, free.transforms, spread=params.spread,
                        pivot_regularisation=params.pivot_regularisation)
     tree = bone_tree(rest, free.weights, pairs, params.slide_mismatch * diag)
+    grid = solid_voxels(rest, faces, resolution=params.inside_resolution)
+    moved_in = ~grid.inside(tree.joints)
+    tree = replace(tree, joints=joints_inside(grid, tree))
     free_error = rmse(reconstruct(rest, free.weights, free.transforms), frames) / diag
     weights, transforms, joints, refit = refit_on_tree(rest, frames, surface, free, tree, params,
                                                        float(np.sqrt((free_error**2).mean())),
@@ -197,6 +220,8 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     report = {
         "bones": skeleton.num_joints,
         "sliding_joints": int(tree.sliding.sum()),
+        "joints_moved_inside": int(moved_in.sum()),
+        "joints_outside": int((~grid.inside(joints)).sum()),
         "separate_part_joints": int(tree.floating.sum() - tree.sliding.sum()) - 1,
         "frames": int(frames.shape[0]),
         "vertices": int(frames.shape[1]),

@@ -86,3 +86,21 @@ def test_tree_solve_never_ends_worse_than_it_starts_and_more_sweeps_help(tube):
 def test_refit_rounds_end_at_their_best_round(rig):
     rounds = rig.report["refit_rounds"]
     assert rounds and rig.report["rmse"] == pytest.approx(min(rounds), rel=1e-3, abs=1e-6)
+
+
+def test_joints_outside_the_solid_are_moved_inside(tube):
+    from simcore.geometry.voxelize import solid_voxels
+    from simcore.motion_rig.hierarchy import BoneTree
+    from simcore.motion_rig.solve import joints_inside
+
+    grid = solid_voxels(tube.rest, tube.faces, resolution=32)
+    centre = tube.rest.mean(axis=0)
+    far = centre + np.array([0.0, 0.0, 5.0])
+    joints = np.stack([centre, far, far])
+    borders = np.stack([centre, centre, far])  # bone 1's border is inside, bone 2's is not
+    tree = BoneTree(np.arange(3), np.array([-1, 0, 1]), joints, np.array([True, False, False]),
+                    np.zeros(3, bool), borders)
+    assert not grid.inside(joints[1:]).any()
+    moved = joints_inside(grid, tree)
+    assert grid.inside(moved).all()
+    assert np.allclose(moved[:2], [centre, centre])  # inside already; the border when that is inside
