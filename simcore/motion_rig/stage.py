@@ -32,8 +32,9 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     """Set state.skeleton, state.weights and state.animation from state.mesh_sequence."""
     mesh, sequence = state.mesh, state.mesh_sequence
     if mesh is None or sequence is None:
-        raise InvalidInput("skeleton 'from_motion' needs a mesh sequence upload (a glTF morph-target animation or a "
-                           ".zip of per-frame OBJ/PLY files)", code="no_mesh_sequence", field="options.skeleton")
+        raise InvalidInput("skeleton 'from_motion' needs a mesh sequence upload (a glTF morph-target animation, a "
+                           ".zip of per-frame OBJ/PLY files, or USD with time-sampled points)", code="no_mesh_sequence",
+                           field="options.skeleton")
 
     def report(fraction: float) -> None:
         progress.check_cancel()
