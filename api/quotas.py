@@ -43,10 +43,11 @@ def check_submit(key: ApiKey, defaults: QuotaSettings, content_length: str | Non
     """Raise 429 problem+json when one more job, whose request declares `content_length` bytes, would pass one of
     the key's quotas."""
     incoming_bytes = int(content_length) if content_length and content_length.isdigit() else 0
-    concurrent = _limit(key.max_concurrent_jobs, defaults.concurrent_jobs)
-    hourly = _limit(key.max_jobs_per_hour, defaults.jobs_per_hour)
-    storage = _limit(key.max_storage_bytes, defaults.storage_mb * 1024 * 1024)
     with session_scope() as session:
+        row = session.get(ApiKey, key.id) or key  # the limits as stored now: `key` may come from the auth cache
+        concurrent = _limit(row.max_concurrent_jobs, defaults.concurrent_jobs)
+        hourly = _limit(row.max_jobs_per_hour, defaults.jobs_per_hour)
+        storage = _limit(row.max_storage_bytes, defaults.storage_mb * 1024 * 1024)
         if concurrent < math.inf:
             active = session.scalar(select(func.count()).select_from(Job)
                                     .where(Job.owner_id == key.id, Job.status.in_(("queued", "running")))) or 0

@@ -12,6 +12,7 @@ import math
 import time
 from functools import lru_cache
 
+from fastapi.concurrency import run_in_threadpool
 from limits import RateLimitItem, parse_many
 from limits.storage import storage_from_string
 from limits.strategies import MovingWindowRateLimiter
@@ -55,6 +56,13 @@ def check(identity: str, settings: Settings) -> None:
                   headers={"Retry-After": str(max(1, math.ceil(reset - time.time())))})
 
 
-def rate_limited(key: CurrentKey) -> None:
-    """Router dependency: the signed-in key's request counts against its rate limit."""
-    check(str(key.id), get_settings())
+async def rate_limited(key: CurrentKey) -> None:
+    """Router dependency: the signed-in key's request counts against its rate limit (in this process's memory on the
+    event loop; in Redis from a worker thread)."""
+    settings = get_settings()
+    if not settings.rate_limit.strip():
+        return
+    if storage_uri(settings).startswith("memory://"):
+        check(str(key.id), settings)
+    else:
+        await run_in_threadpool(check, str(key.id), settings)

@@ -15,12 +15,13 @@ from simcore.budgets import Budgets
 class JobSettings(BaseModel):
     """Durability knobs of the job system (RIGFORGE_JOBS__<NAME>)."""
 
-    lease_seconds: float = Field(60.0, gt=0, description="a running job whose lease is older than this is presumed lost")
-    heartbeat_seconds: float = Field(10.0, gt=0, description="how often a worker renews its lease")
+    lease_seconds: float = Field(15.0, gt=0, description="a running job whose lease is older than this is presumed lost (its "
+                                 "whole worker died): it is retried within lease_seconds + reconcile_seconds")
+    heartbeat_seconds: float = Field(3.0, gt=0, description="how often a worker renews its lease (5 missed renewals lose it)")
     max_attempts: int = Field(3, ge=1, description="deliveries before a lost job fails with worker_lost")
     soft_time_limit: int = Field(3300, gt=0, description="seconds before a job is asked to stop (fails with timeout)")
     time_limit: int = Field(3600, gt=0, description="seconds before the worker process running a job is killed")
-    reconcile_seconds: float = Field(15.0, gt=0, description="period of the reconciler that re-queues lost jobs")
+    reconcile_seconds: float = Field(2.0, gt=0, description="period of the reconciler that re-queues lost jobs")
     requeue_after_seconds: float = Field(120.0, gt=0, description="re-send a queued job whose message may be lost")
     worker_stall_seconds: float = Field(60.0, gt=0, description="serve restarts its embedded worker when a job waits queued this "
                                         "long with none running")
@@ -76,6 +77,10 @@ class Settings(BaseSettings):
     rate_limit: str = Field("100/second;3000/minute", description="requests per API key, in the `limits` notation ('N/period;...')")
     rate_limit_storage: str | None = Field(None, description="where API replicas share rate-limit counters (redis://...); "
                                            "default the Redis broker, else this process's memory")
+    auth_cache_seconds: float = Field(10.0, ge=0, description="an API process trusts a key it verified this long (0: check every "
+                                      "request); revoking a key over HTTP or with Redis notices ends it at once")
+    job_cache_seconds: float = Field(5.0, ge=0, description="on a Redis broker an API process answers a job from memory this long "
+                                     "at most (0: never); every change of the job ends it at once")
     log_format: Literal["text", "json"] = Field("text", description="json: one JSON object per log line, with job_id where known")
     budgets: Budgets = Field(default_factory=Budgets, description="per-job time, memory and sampling budgets")
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 
 def reset_singletons() -> None:
+    from api import changes
     from api.db import reset_caches
     from api.settings import get_settings
     from api.signed_urls import signing_key
@@ -20,6 +21,7 @@ def reset_singletons() -> None:
     make_celery.cache_clear()
     get_storage.cache_clear()
     signing_key.cache_clear()
+    changes.reset()  # stop listening to the previous service's notices; caches start empty
 
 
 @contextmanager

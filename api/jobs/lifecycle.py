@@ -15,6 +15,7 @@ from datetime import timedelta
 from sqlalchemy import delete, or_, select, update
 from sqlalchemy.orm import Session
 
+from api import changes
 from api.db import session_scope
 from api.jobs import state
 from api.models import Artifact, Asset, Job, WebhookDelivery, Worker
@@ -63,6 +64,7 @@ def delete_job(job_id: uuid.UUID, storage: Storage | None = None) -> None:
     """Remove a job, its artifacts and its uploads no other job uses; a queued or running job is canceled first."""
     with session_scope() as session:
         uploads = _remove_rows(session, job_id)
+    changes.publish("job", job_id)
     storage = storage or get_storage()
     storage.delete_job(job_id)
     for locator in uploads:

@@ -2,25 +2,24 @@
 
 from __future__ import annotations
 
-import asyncio
 import json
 import uuid
-from collections.abc import AsyncIterator
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, File, Form, Header, Query, Request, Response, UploadFile
-from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse, StreamingResponse
 from pydantic import ValidationError
 
 from api.auth import CurrentKey
 from api.db import session_scope
 from api.errors import Problem
-from api.http_cache import etagged
+from api.http_cache import conditional
 from api.jobs import lifecycle, service, state
 from api.jobs.artifact_responses import artifact_response, find_artifact, zip_response
+from api.jobs.events import job_stream
 from api.jobs.schemas import JobOut, JobPage, JobStatus
 from api.jobs.uploads import store_skeleton, store_upload
+from api.jobs.views import owned_view
 from api.models import Job
 from api.openapi import BINARY, json_part, json_part_encoding
 from api.problem_schema import problem_responses
@@ -35,9 +34,6 @@ from simcore.options import JobOptions
 
 router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], dependencies=[Depends(rate_limited)],
                    responses=problem_responses(401, 429))
-SSE_POLL_SECONDS = 0.3
-# signed download URLs change with their expiry, not with the job: the ETag leaves them out
-VOLATILE = {"artifacts": {"__all__": {"download_url"}}, "download_all_url": True}
 MAX_OPTIONS_DEPTH = 8  # JobOptions nests 3 deep (refine.bone_stiffness)
 OPTIONS_EXAMPLE = {"skeleton": "auto", "skinning": "auto", "motion": {"in_place": True}, "fbx": True}
 
@@ -146,10 +142,12 @@ def list_jobs(
 
 @router.get("/{job_id}", response_model=JobOut, summary="One job's status, progress, error and artifacts",
             responses={304: {"description": "Not Modified: the job is as the If-None-Match ETag says"}, **problem_responses(404, 422)})
-def get_job(request: Request, job: OwnedJob,
-            if_none_match: Annotated[str | None, Header(alias="If-None-Match", description="an ETag from an earlier answer: "
-                                                        "304 when the job has not changed")] = None) -> Response:
-    return etagged(service.to_schema(job, base_url(request)), if_none_match, exclude=VOLATILE)
+async def get_job(request: Request, job_id: uuid.UUID, key: CurrentKey,
+                  if_none_match: Annotated[str | None, Header(alias="If-None-Match", description="an ETag from an earlier answer: "
+                                                              "304 when the job has not changed")] = None) -> Response:
+    view = await owned_view(job_id, key, base_url(request))  # no database read while the job is unchanged (api.jobs.views)
+    accept = request.headers.get("accept-encoding") or ""
+    return conditional(view.body, view.etag, if_none_match, accept, view.body_gzip if "gzip" in accept else None)
 
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job",
@@ -197,37 +195,12 @@ def delete_job(job: OwnedJob) -> Response:
     return Response(status_code=204)
 
 
-def _snapshot(job_id: uuid.UUID, base: str) -> dict | None:
-    with session_scope() as session:
-        job = session.get(Job, job_id)
-        return None if job is None else service.to_schema(job, base).model_dump(mode="json")
-
-
 @router.get("/{job_id}/events", summary="Server-sent events: one per status/stage/progress change",
             response_class=StreamingResponse, operation_id="streamJobEvents",
             responses={200: {"description": "`event: job` with the job's JSON as data, until it ends",
                              "content": {"text/event-stream": {"schema": {"type": "string"}}}}, **problem_responses(404, 422)})
-async def job_events(request: Request, job: OwnedJob) -> StreamingResponse:
+async def job_events(request: Request, job_id: uuid.UUID, key: CurrentKey) -> StreamingResponse:
     base = base_url(request)
-
-    async def stream() -> AsyncIterator[str]:
-        last, idle = None, 0.0
-        while True:
-            snap = await run_in_threadpool(_snapshot, job.id, base)
-            if snap is None:
-                return
-            key = (snap["status"], snap["stage"], snap["progress"])
-            if key != last:
-                last, idle = key, 0.0
-                yield f"event: job\ndata: {json.dumps(snap)}\n\n"
-                if snap["status"] in state.TERMINAL:
-                    return
-            elif idle >= 15:
-                idle = 0.0
-                yield ": keep-alive\n\n"
-            if await request.is_disconnected():
-                return
-            await asyncio.sleep(SSE_POLL_SECONDS)
-            idle += SSE_POLL_SECONDS
-
-    return StreamingResponse(stream(), media_type="text/event-stream", headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
+    await owned_view(job_id, key, base)  # 404 before the stream starts
+    return StreamingResponse(job_stream(job_id, base), media_type="text/event-stream",
+                             headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})

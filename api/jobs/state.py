@@ -1,7 +1,9 @@
 """The job state machine. Every transition is a compare-and-set UPDATE, so concurrent workers, the
-reconciler and the API can never move one job twice; `attempts` is the fencing token of a run.
+reconciler and the API can never move one job twice; `attempts` is the fencing token of a run. Every transition
+that changes what a client sees publishes a change notice after its commit (api.changes).
 
-queued → running → succeeded | failed | canceled;  queued → canceled;  running → queued (lease lost).
+queued → running → succeeded | failed | canceled;  queued → canceled;  running → queued (lease lost, or the
+process running it died).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from datetime import UTC, datetime, timedelta
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
+from api import changes
 from api.db import rowcount
 from api.models import Artifact, Job
 from api.webhooks import outbox
@@ -48,7 +51,10 @@ def claim(session: Session, job_id: uuid.UUID, worker_id: str, lease_seconds: fl
         .execution_options(synchronize_session=False)
     )
     session.commit()
-    return Claim(job_id, attempt, worker_id) if rowcount(result) == 1 else None
+    if rowcount(result) != 1:
+        return None
+    changes.publish("job", job_id)
+    return Claim(job_id, attempt, worker_id)
 
 
 def _running(claim_: Claim):  # noqa: ANN202
@@ -76,7 +82,10 @@ def report_progress(session: Session, claim_: Claim, stage: str, progress: float
         .execution_options(synchronize_session=False)
     )
     session.commit()
-    return rowcount(result) == 1
+    if rowcount(result) != 1:
+        return False
+    changes.publish("job", claim_.job_id)
+    return True
 
 
 def succeed(session: Session, claim_: Claim, artifacts: list[dict], warnings: list[dict] | None = None,
@@ -95,6 +104,7 @@ def succeed(session: Session, claim_: Claim, artifacts: list[dict], warnings: li
     session.add_all(Artifact(job_id=claim_.job_id, **a) for a in artifacts)
     outbox.record(session, claim_.job_id, "job.succeeded")
     session.commit()
+    changes.publish("job", claim_.job_id)
     return True
 
 
@@ -111,6 +121,7 @@ def fail(session: Session, claim_: Claim, code: str, message: str, warnings: lis
         return False
     outbox.record(session, claim_.job_id, "job.failed")
     session.commit()
+    changes.publish("job", claim_.job_id)
     return True
 
 
@@ -126,12 +137,43 @@ def cancel(session: Session, job_id: uuid.UUID) -> bool:
         return False
     outbox.record(session, job_id, "job.canceled")
     session.commit()
+    changes.publish("job", job_id)
     return True
 
 
 def mark_enqueued(session: Session, job_id: uuid.UUID) -> None:
     session.execute(update(Job).where(Job.id == job_id).values(enqueued_at=now()).execution_options(synchronize_session=False))
     session.commit()
+
+
+def _lost_values(attempts: int, max_attempts: int, t: datetime) -> dict:
+    """What a running attempt that was lost becomes: queued again, or failed past max_attempts."""
+    if attempts >= max_attempts:
+        return dict(status="failed", finished_at=t, lease_expires_at=None, error_code="worker_lost",
+                    error_message=f"the worker running this job stopped responding {attempts} times")
+    return dict(status="queued", stage="requeued", lease_expires_at=None, worker_id=None, enqueued_at=t)
+
+
+def release_lost(session: Session, job_id: uuid.UUID, worker_id: str, max_attempts: int) -> str | None:
+    """The process `worker_id` died running the job: re-queue it now, without waiting for its lease (or fail it past
+    max_attempts). Returns the new status, or None when that process no longer held the job."""
+    job = session.get(Job, job_id)
+    if job is None:
+        return None
+    t, attempts = now(), job.attempts
+    values = _lost_values(attempts, max_attempts, t)
+    result = session.execute(
+        update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, Job.worker_id == worker_id)
+        .values(**values).execution_options(synchronize_session=False)
+    )
+    if rowcount(result) != 1:
+        session.rollback()
+        return None
+    if values["status"] == "failed":
+        outbox.record(session, job_id, "job.failed")
+    session.commit()
+    changes.publish("job", job_id)
+    return str(values["status"])
 
 
 def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float) -> tuple[list[uuid.UUID], list[uuid.UUID]]:
@@ -146,11 +188,7 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
     expired = session.execute(select(Job.id, Job.attempts).where(Job.status == "running", Job.lease_expires_at < t)).all()
     for job_id, attempts in expired:
         done = attempts >= max_attempts
-        values = (
-            dict(status="failed", finished_at=t, lease_expires_at=None, error_code="worker_lost",
-                 error_message=f"the worker running this job stopped responding {attempts} times")
-            if done else dict(status="queued", stage="requeued", lease_expires_at=None, worker_id=None, enqueued_at=t)
-        )
+        values = _lost_values(attempts, max_attempts, t)
         result = session.execute(
             update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, Job.lease_expires_at < t)
             .values(**values).execution_options(synchronize_session=False)
@@ -165,4 +203,6 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
                         .execution_options(synchronize_session=False))
         requeue.append(job_id)
     session.commit()
+    for job_id in (*requeue, *lost):
+        changes.publish("job", job_id)
     return requeue, lost

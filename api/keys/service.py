@@ -9,6 +9,7 @@ import uuid
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from api import changes
 from api.jobs.state import now
 from api.models import ApiKey
 from api.webhooks.signing import new_secret
@@ -30,7 +31,12 @@ def create_key(session: Session, *, name: str, admin: bool = False) -> tuple[Api
 
 
 def find_active(session: Session, *, secret: str) -> ApiKey | None:
-    row = session.scalar(select(ApiKey).where(ApiKey.key_hash == hash_key(secret)))
+    return find_active_by_hash(session, hash_key(secret))
+
+
+def find_active_by_hash(session: Session, digest: str) -> ApiKey | None:
+    """The active key whose secret hashes to `digest`, or None (unknown or revoked)."""
+    row = session.scalar(select(ApiKey).where(ApiKey.key_hash == digest))
     return row if row is not None and row.revoked_at is None else None
 
 
@@ -47,4 +53,5 @@ def revoke(session: Session, *, key_id_or_prefix: str) -> ApiKey | None:
     if row is not None and row.revoked_at is None:
         row.revoked_at = now()
         session.commit()
+        changes.publish("key", row.id)  # API processes forget the key they verified (api.auth)
     return row

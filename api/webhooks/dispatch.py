@@ -16,6 +16,7 @@ from datetime import timedelta
 import httpx
 from sqlalchemy import select, update
 
+from api import changes
 from api.db import rowcount, session_scope
 from api.models import ApiKey, WebhookDelivery, utcnow
 from api.settings import Settings, WebhookSettings
@@ -87,7 +88,10 @@ def record_attempt(delivery_id: uuid.UUID, attempt: dict, settings: WebhookSetti
         else:
             status, next_at, delivered = "pending", utcnow() + timedelta(seconds=backoff_seconds(len(attempts), settings)), None
         delivery.attempts, delivery.status, delivery.next_attempt_at, delivery.delivered_at = attempts, status, next_at, delivered
-        return status
+        job_id = delivery.job_id
+    if job_id is not None:
+        changes.publish("job", job_id)  # the job's JSON lists its deliveries
+    return status
 
 
 def deliver_due(settings: Settings) -> int:
