@@ -18,7 +18,9 @@ Method (world-space delta transfer):
    D_t · R_bind (R_bind = the target's bind orientation, identity for world-aligned skeletons).
 4. Root motion: the source root's displacement scaled by the hip-height ratio (in place if asked), then a
    per-frame vertical correction that keeps the target's lowest contact joint as high above the target's
-   ground as the source's is above its own (feet stay on the floor, jumps keep their height).
+   ground as the source's is above its own (feet stay on the floor, jumps keep their height). For one body,
+   the source's contact joints are those the target's contact joints map to (IK rigs hang the feet off a
+   floor root, outside the subtree that carries the root motion).
 """
 
 from __future__ import annotations
@@ -313,6 +315,9 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     moving = _subtree(parents, motion_root)
     contacts_t = _contacts(target.positions, np.flatnonzero(moving))
     contacts_s = _contacts(rest_s, np.flatnonzero(_subtree(source.parents, source_root)))
+    touching = sorted({mapping[j] for j in contacts_t.tolist() if j in mapping})
+    if same_body and touching:  # one body: the source joints at our feet touch its floor (feet may hang off an IK root)
+        contacts_s = np.asarray(touching, np.int64)
     hs, ht = _hip_height(rest_s, source_root, contacts_s), _hip_height(target.positions, motion_root, contacts_t)
     if same_body:
         scale = 1.0  # hip heights differ only by where each skeleton put its joints

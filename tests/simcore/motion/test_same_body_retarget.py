@@ -85,3 +85,20 @@ def test_clavicle_mapped_with_the_arm_stays_with_the_chest():
                       np.array([-1, 0, 1, 2]), ["t_chest", "t_clav", "t_arm", "t_hand"]).validate()
     assert one_pivot_per_source_joint(source, target, {0: 0, 1: 1, 2: 1, 3: 2}, 0) == {0: 0, 2: 1, 3: 2}
     assert map_joints(source, target)[0].get(1) != 1  # as the structural mapping gives it
+
+
+def test_feet_hanging_off_a_floor_root_keep_the_floor():
+    """An IK-style source: the feet hang off a floor root, outside the body that carries the root motion. The
+    body drops 0.2 while the feet stay down: our feet stay on the floor too (not 0.2 below it, as the lowest
+    joint of the body's subtree, the knee, would have them)."""
+    source = Skeleton(np.array([[0.0, 0.0, -0.5], [0.0, 1.0, 0.0], [0.0, 0.5, 0.02], [0.0, 0.05, 0.0], [0.0, 0.02, 0.15]]),
+                      np.array([-1, 0, 1, 0, 3]), ["floor", "body", "knee", "foot", "toe"]).validate()
+    target = Skeleton(np.array([[0.0, 1.0, 0.0], [0.0, 0.5, 0.02], [0.0, 0.05, 0.0], [0.0, 0.02, 0.15]]), np.array([-1, 0, 1, 2]),
+                      ["t_hip", "t_knee", "t_foot", "t_toe"]).validate()
+    anim = _still(source, 3)
+    anim.translations[:, 1, 1] -= np.array([0.0, 0.1, 0.2])  # the body crouches; the foot's own key stays put
+    clip = MotionClip(source, anim, rest_is_standing=True, source_format="test", shares_bind_pose=True)
+    out = retarget(clip, target)
+    assert out.mapping["t_foot"] == "foot" and out.contact_joints == ["t_foot", "t_toe"]
+    feet = _world(target, out.animation)[:, 2, 1, 3]
+    assert np.allclose(feet, 0.05, atol=1e-9)
