@@ -5,7 +5,9 @@ Config choices (why):
   most one job it has not started, so a crash loses no message it took.
 - no result backend: results live in the database row, not in Celery.
 - soft/hard time limits per job; the Redis visibility timeout is above the hard limit so Redis never
-  re-delivers a job that is still legitimately running.
+  re-delivers a job that is still legitimately running. It does not decide how fast a lost job comes back: the
+  job row's lease does (worker.reconciler: a killed pool process's job is re-sent at once, a dead worker's once
+  its lease expires, 15 s after its last heartbeat by default, plus at most one 2 s reconciler period).
 - filesystem:// (the embedded default) keeps the queue in files under the data directory: no server. Its
   transport is polled from the worker's event loop (worker.filesystem_transport), so a killed pool process
   cannot wedge the worker.

@@ -22,7 +22,7 @@ _pool_size = 1  # this worker's pool processes (its concurrency), known to the c
 _inherited_pools: list[object] = []  # in a pool process: the main process's connection pools, forked with it
 
 
-@app.task(name=TASK_NAME, ignore_result=True)
+@app.task(name=TASK_NAME, ignore_result=True, Request="worker.reconciler:LostJobRequest")  # re-queues a killed job at once
 def run_job(job_id: str) -> str:
     """Run job `job_id` if this delivery wins the claim."""
     with job_context(job_id):

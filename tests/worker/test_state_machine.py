@@ -87,3 +87,23 @@ def test_cancel_stops_a_running_attempt(job_id):
         assert not state.succeed(s, c, [])
         assert not state.cancel(s, job_id)
     assert get(job_id).status == "canceled"
+
+
+def test_a_dead_pool_process_gives_its_job_back_at_once(job_id):
+    """release_lost (a worker's main process saw the pool process die): queued again without waiting for the lease,
+    only when that process still held the job."""
+    with session_scope() as s:
+        first = state.claim(s, job_id, "host:101", 60)
+        assert first is not None
+        assert state.release_lost(s, job_id, "host:999", max_attempts=3) is None  # another process's attempt
+        assert get(job_id).status == "running"
+        assert state.release_lost(s, job_id, "host:101", max_attempts=3) == "queued"
+        assert state.release_lost(s, job_id, "host:101", max_attempts=3) is None  # already given back
+        job = get(job_id)
+        assert job.status == "queued" and job.worker_id is None and job.lease_expires_at is None
+        second = state.claim(s, job_id, "host:102", 60)
+        assert second is not None and second.attempt == 2
+        assert not state.succeed(s, first, [])  # the dead attempt is fenced off
+        assert state.release_lost(s, job_id, "host:102", max_attempts=2) == "failed"
+    job = get(job_id)
+    assert job.status == "failed" and job.error_code == "worker_lost"
