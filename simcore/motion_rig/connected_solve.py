@@ -40,9 +40,10 @@ def _subtrees(parents: np.ndarray) -> list[np.ndarray]:
 def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarray, parents: np.ndarray,
                          joints: np.ndarray, floating: np.ndarray, start: np.ndarray, *, sweeps: int,
                          joint_regularisation: float, min_gain: float = 0.0,
-                         anchors: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(T, B, 4, 4) rigid transforms with each bone's joint carried by its parent in every frame, and the
-    re-fitted (B, 3) rest joints: the sweep (or the start) of least squared error over every frame and vertex.
+                         anchors: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+    """(T, B, 4, 4) rigid transforms with each bone's joint carried by its parent in every frame, the re-fitted
+    (B, 3) rest joints (the sweep, or the start, of least squared error over every frame and vertex), and the
+    number of sweeps run.
 
     rest: (V, 3) bind pose; frames: (T, V, 3); weights: (V, B) rows summing to 1; parents: (B,) parents first,
     root -1; joints: (B, 3) rest joints; floating: (B,) bool bones whose joint moves freely (the root's);
@@ -122,7 +123,9 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
         return head + np.tensordot(share, resid[on], axes=(0, 0)) / mass, mass
 
     best = (float(np.square(resid).sum()), rot.copy(), trans.copy(), joints.copy())
+    done = 0
     for _ in range(sweeps):
+        done += 1
         for b in range(count):
             carry(b)  # the parent moved since this bone's last update
             on, w = support[b], weights[support[b], b]
@@ -157,4 +160,4 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
     out = np.tile(np.eye(4), (steps, count, 1, 1))
     out[:, :, :3, :3] = rot
     out[:, :, :3, 3] = trans
-    return out, joints
+    return out, joints, done

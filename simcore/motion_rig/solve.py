@@ -59,6 +59,7 @@ class MotionRigParams:
     slide_mismatch: float = 0.01  # share of the diagonal: a bone pair that far from turning about a point slides
     sweeps: int = 48  # at most this many tree transform sweeps per round
     sweep_gain: float = 0.005  # a round's sweeps stop after one that cuts the squared error by less than this
+    total_sweeps: int = 200  # sweeps over all rounds (the time of the re-fit is about this many sweeps at most)
     rounds: int = 24  # at most this many weight → transform alternations on the tree
     weight_iterations: int = 3
     inside_resolution: int = 64  # voxels along the longest side of the solid that joints are moved into
@@ -155,18 +156,25 @@ def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, fre
     Starts from the free bones' weights and motion with the joints carried by their parents, then alternates a
     weight solve (Dem Bones, transforms fixed) with a connected transform and joint fit: each alternation lets
     the weights take up what the joint constraints cost. It stops once the error reaches `free_error` (the
-    unconstrained fit at this count), after `patience` rounds in a row that gain less than `round_gain`, or after
-    `params.rounds`; the best round is kept (the weight solve's smoothing can cost a round some error).
+    unconstrained fit at this count), after `patience` rounds in a row that gain less than `round_gain`, after
+    `params.rounds`, or once `params.total_sweeps` transform sweeps have run (a bound on its time); the best round
+    is kept (the weight solve's smoothing can cost a round some error).
     """
     diag = float(np.linalg.norm(np.ptp(frames[0], axis=0)))
 
     def error(w: np.ndarray, m: np.ndarray) -> float:
         return float(np.sqrt((rmse(reconstruct(rest, w, m), frames) ** 2).mean())) / diag
 
+    budget = params.total_sweeps
+
     def transforms_for(w: np.ndarray, m: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return connected_transforms(rest, frames, w, tree.parents, j, tree.floating, m, sweeps=params.sweeps,
-                                    joint_regularisation=params.pivot_regularisation, min_gain=params.sweep_gain,
-                                    anchors=tree.joints)
+        nonlocal budget
+        out, moved, done = connected_transforms(rest, frames, w, tree.parents, j, tree.floating, m,
+                                                sweeps=min(params.sweeps, budget),
+                                                joint_regularisation=params.pivot_regularisation,
+                                                min_gain=params.sweep_gain, anchors=tree.joints)
+        budget -= done
+        return out, moved
 
     weights = free.weights[:, tree.order]
     transforms, joints = transforms_for(weights, free.transforms[:, tree.order], tree.joints)
@@ -174,7 +182,7 @@ def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, fre
     best = (errors[0], weights, transforms, joints)
     stalled = 0
     for r in range(params.rounds):
-        if best[0] <= free_error or stalled >= params.patience:
+        if best[0] <= free_error or stalled >= params.patience or budget <= 0:
             break
         weights = solve_weights(rest, frames, surface, BoneFit(weights, transforms),
                                 max_influences=params.max_influences, iterations=params.weight_iterations)

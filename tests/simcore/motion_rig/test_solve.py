@@ -46,7 +46,7 @@ def test_tree_solve_keeps_each_child_joint_on_its_parent(tube):
     joints = np.array([[0.0, 0, 0], [0.33, 0, 0], [0.66, 0, 0]])
     floating = np.array([True, False, False])
     order = np.argsort(free.weights.T @ tube.rest[:, 0] / free.weights.sum(axis=0))  # bones along the tube
-    transforms, joints = connected_transforms(tube.rest, tube.frames, free.weights[:, order], parents, joints,
+    transforms, joints, _ = connected_transforms(tube.rest, tube.frames, free.weights[:, order], parents, joints,
                                               floating, free.transforms[:, order], sweeps=2, joint_regularisation=1e-3)
     for child in (1, 2):
         head = np.append(joints[child], 1.0)
@@ -76,9 +76,10 @@ def test_tree_solve_never_ends_worse_than_it_starts_and_more_sweeps_help(tube):
     joints = 0.5 * (centres + centres[np.maximum(parents, 0)])  # midway to the parent: not where they belong
     errors = []
     for sweeps in (0, 1, 8):
-        transforms, _ = connected_transforms(tube.rest, tube.frames, weights, parents, joints, floating, start,
+        transforms, _, done = connected_transforms(tube.rest, tube.frames, weights, parents, joints, floating, start,
                                              sweeps=sweeps, joint_regularisation=1e-4)
         errors.append(_fit_error(tube, weights, transforms))
+        assert done <= sweeps
     assert errors[2] <= errors[1] <= errors[0]
     assert errors[2] < 0.8 * errors[0]
 
