@@ -1,15 +1,18 @@
-"""API load: job status polls per second with p50/p99 latency while the worker is busy, and 20 concurrent 5 MB
-uploads, on the embedded default (SQLite + file broker) and on PostgreSQL + Redis.
+"""API load: job status polls per second with p50/p99 latency while the worker is busy, the same with 500 event
+streams open, and 20 concurrent 5 MB uploads, on the embedded default (SQLite + file broker) and on PostgreSQL + Redis.
 
 Each backend runs a real `rigforge serve` (uvicorn, one embedded worker) in a fresh data directory. The worker is
 kept busy with full-pipeline jobs on the dev fox (a generated box when ../shared is absent) while `--pollers`
-threads GET one job for `--seconds`: first plain GETs, then conditional ones (If-None-Match: the 304 path), after
-the same clients on `/healthz` (no key, no database: the reference of the HTTP stack on this machine, this run). Then
-`--uploads` threads each POST a `--upload-mb` GLB at once; a 503/429 is retried after its Retry-After, and
-counted. Rate limits and quotas are off so that the server, not the per-key limits, is measured. Prints a table
-and writes bench/results/load.json.
+keep-alive clients GET one job for `--seconds`: first plain GETs, then conditional ones (If-None-Match: the 304
+path), after the same clients on `/healthz` (no key, no database: the reference of the HTTP stack on this machine,
+this run). Then `--streams` clients open the busy jobs' event streams (SSE) and keep them open while the plain GETs run
+again: the slow-down is the ratio of their latencies to the run without streams. Then `--uploads` threads each
+POST a `--upload-mb` GLB at once; a 503/429 is retried after its Retry-After, and counted. Rate limits and quotas
+are off so that the server, not the per-key limits, is measured. The pollers are minimal HTTP/1.1 clients on raw
+sockets (httpx costs more CPU per request than the server's answer, on the same two cores). Server CPU is the
+API process's user + system time per request. Prints a table and writes bench/results/load.json.
 
-    .venv/bin/python bench/load.py [--backends embedded,postgres] [--seconds 10] [--pollers 8] [--uploads 20]
+    .venv/bin/python bench/load.py [--backends embedded,postgres] [--seconds 10] [--pollers 8] [--streams 500] [--uploads 20]
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import tempfile
 import threading
 import time
 import uuid
+from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -85,8 +89,8 @@ def postgres_and_redis() -> Iterator[dict[str, str]]:
 
 
 @contextmanager
-def serve(env: dict[str, str]) -> Iterator[tuple[str, str]]:
-    """`rigforge serve` in a fresh data directory; yields (base URL, API key) once /readyz says ready."""
+def serve(env: dict[str, str]) -> Iterator[tuple[str, str, int]]:
+    """`rigforge serve` in a fresh data directory; yields (base URL, API key, its pid) once /readyz says ready."""
     with tempfile.TemporaryDirectory(prefix="rigforge-load-") as tmp:
         port = free_port()
         full = {**os.environ, **UNLIMITED, **env, "RIGFORGE_DATA_DIR": tmp}
@@ -106,7 +110,7 @@ def serve(env: dict[str, str]) -> Iterator[tuple[str, str]]:
                 time.sleep(0.5)
             else:
                 raise RuntimeError("rigforge serve did not become ready in 180 s")
-            yield base, (Path(tmp) / "local-api-key").read_text().strip()
+            yield base, (Path(tmp) / "local-api-key").read_text().strip(), proc.pid
         finally:
             os.killpg(proc.pid, signal.SIGTERM)
             proc.wait(60)
@@ -116,33 +120,119 @@ def percentile(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) if values else float("nan")
 
 
-def poll(base: str, key: str, path: str, threads: int, seconds: float, conditional: bool) -> dict:
-    """`threads` clients GET `path` back to back for `seconds`; polls/s and latency percentiles (ms)."""
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of process `pid` so far (its threads included)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+class Connection:
+    """One keep-alive HTTP/1.1 connection that sends GETs and reads whole answers (Content-Length bodies)."""
+
+    def __init__(self, base: str) -> None:
+        host, port = base.removeprefix("http://").rsplit(":", 1)
+        self.host = f"{host}:{port}"
+        self.sock = socket.create_connection((host, int(port)), timeout=30)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.reader = self.sock.makefile("rb")
+
+    def request(self, path: str, headers: dict[str, str]) -> tuple[int, dict[str, str], bytes]:
+        lines = [f"GET {path} HTTP/1.1", f"Host: {self.host}", *(f"{k}: {v}" for k, v in headers.items())]
+        self.sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+        return self.response()
+
+    def response(self) -> tuple[int, dict[str, str], bytes]:
+        status = int(self.reader.readline().split()[1])
+        answer: dict[str, str] = {}
+        while (line := self.reader.readline()) not in (b"\r\n", b""):
+            name, _, value = line.decode("latin-1").partition(":")
+            answer[name.strip().lower()] = value.strip()
+        if answer.get("transfer-encoding") == "chunked":
+            raise RuntimeError("chunked answers are not expected here")
+        return status, answer, self.reader.read(int(answer.get("content-length", "0")))
+
+    def close(self) -> None:
+        self.reader.close()
+        self.sock.close()
+
+
+def poll(base: str, key: str, path: str, threads: int, seconds: float, conditional: bool, server_pid: int) -> dict:
+    """`threads` clients GET `path` back to back for `seconds`; polls/s, latency percentiles (ms), server CPU ms/poll."""
     latencies: list[list[float]] = [[] for _ in range(threads)]
     statuses: dict[int, int] = {}
     lock = threading.Lock()
-    stop = time.monotonic() + seconds
+    headers = {"Authorization": f"Bearer {key}", "Accept-Encoding": "gzip, deflate"}  # as httpx and browsers send
+    ready = threading.Barrier(threads + 1)
+    stop = [0.0]
 
     def client(slot: int) -> None:
-        headers = {"Authorization": f"Bearer {key}"}
-        with httpx.Client(base_url=base, headers=headers, timeout=30) as http:
-            if conditional:
-                headers["If-None-Match"] = http.get(path).headers["etag"]
-            while time.monotonic() < stop:
-                started = time.perf_counter()
-                r = http.get(path, headers=headers)
-                latencies[slot].append((time.perf_counter() - started) * 1000)
-                with lock:
-                    statuses[r.status_code] = statuses.get(r.status_code, 0) + 1
+        http = Connection(base)
+        mine = dict(headers)
+        if conditional:
+            mine["If-None-Match"] = http.request(path, headers)[1]["etag"]
+        ready.wait()
+        counts: dict[int, int] = {}
+        while time.monotonic() < stop[0]:
+            started = time.perf_counter()
+            status = http.request(path, mine)[0]
+            latencies[slot].append((time.perf_counter() - started) * 1000)
+            counts[status] = counts.get(status, 0) + 1
+        http.close()
+        with lock:
+            for status, n in counts.items():
+                statuses[status] = statuses.get(status, 0) + n
 
     workers = [threading.Thread(target=client, args=(k,)) for k in range(threads)]
     for w in workers:
         w.start()
+    stop[0] = time.monotonic() + seconds
+    cpu_before = cpu_seconds(server_pid)
+    ready.wait()
     for w in workers:
         w.join()
+    cpu = cpu_seconds(server_pid) - cpu_before
     flat = [x for slot in latencies for x in slot]
     return {"polls_per_s": round(len(flat) / seconds, 1), "p50_ms": round(percentile(flat, 50), 1),
-            "p99_ms": round(percentile(flat, 99), 1), "statuses": statuses}
+            "p99_ms": round(percentile(flat, 99), 1), "server_cpu_ms_per_poll": round(1000 * cpu / max(1, len(flat)), 3),
+            "statuses": statuses}
+
+
+class EventStreams:
+    """`count` open event streams (SSE), round-robin over `paths`, read and discarded by one thread until `close()`."""
+
+    def __init__(self, base: str, key: str, paths: list[str], count: int) -> None:
+        import selectors
+
+        self.selector = selectors.DefaultSelector()
+        self.connections: list[Connection] = []
+        self.bytes_read = 0
+        for k in range(count):
+            http = Connection(base)
+            lines = [f"GET {paths[k % len(paths)]} HTTP/1.1", f"Host: {http.host}", f"Authorization: Bearer {key}", "Accept: text/event-stream"]
+            http.sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+            status = int(http.reader.readline().split()[1])
+            if status != 200:
+                raise RuntimeError(f"event stream answered {status}")
+            http.sock.setblocking(False)
+            self.selector.register(http.sock, selectors.EVENT_READ)
+            self.connections.append(http)
+        self.stopped = threading.Event()
+        self.thread = threading.Thread(target=self._drain, daemon=True)
+        self.thread.start()
+
+    def _drain(self) -> None:
+        while not self.stopped.is_set():
+            for ready, _ in self.selector.select(0.2):
+                try:
+                    self.bytes_read += len(ready.fileobj.recv(65536))  # type: ignore[union-attr]
+                except (BlockingIOError, OSError):
+                    pass
+
+    def close(self) -> None:
+        self.stopped.set()
+        self.thread.join()
+        for http in self.connections:
+            http.sock.close()
 
 
 def upload_all(base: str, key: str, data: bytes, count: int) -> dict:
@@ -198,16 +288,31 @@ def running(base: str, key: str) -> int:
 
 
 def measure(name: str, env: dict[str, str], args: argparse.Namespace, upload: bytes) -> dict:
-    with serve(env) as (base, key):
+    with serve(env) as (base, key, pid):
         ids = busy_jobs(base, key, args.busy_jobs)
         busy_before = running(base, key)
-        reference = poll(base, key, "/healthz", args.pollers, args.seconds, conditional=False)
-        plain = poll(base, key, f"/api/v1/jobs/{ids[0]}", args.pollers, args.seconds, conditional=False)
-        cond = poll(base, key, f"/api/v1/jobs/{ids[-1]}", args.pollers, args.seconds, conditional=True)
+        reference = poll(base, key, "/healthz", args.pollers, args.seconds, False, pid)
+        plain = poll(base, key, f"/api/v1/jobs/{ids[0]}", args.pollers, args.seconds, False, pid)
+        cond = poll(base, key, f"/api/v1/jobs/{ids[-1]}", args.pollers, args.seconds, True, pid)
+        streams: dict = {"count": args.streams}
+        if args.streams:
+            alone = poll(base, key, f"/api/v1/jobs/{ids[0]}", args.pollers, args.seconds, False, pid)
+            opened = time.perf_counter()
+            sse = EventStreams(base, key, [f"/api/v1/jobs/{i}/events" for i in ids], args.streams)
+            streams["open_s"] = round(time.perf_counter() - opened, 2)
+            try:
+                beside = poll(base, key, f"/api/v1/jobs/{ids[0]}", args.pollers, args.seconds, False, pid)
+            finally:
+                sse.close()
+            streams.update(alone=alone, beside=beside, slowdown_p50=round(beside["p50_ms"] / alone["p50_ms"], 2),
+                           slowdown_p99=round(beside["p99_ms"] / alone["p99_ms"], 2),
+                           rate_ratio=round(alone["polls_per_s"] / beside["polls_per_s"], 2), bytes_read=sse.bytes_read)
         busy_after = running(base, key)
+        busy = [httpx.get(f"{base}/api/v1/jobs/{i}", headers={"Authorization": f"Bearer {key}"}).json() for i in ids]
         uploads = upload_all(base, key, upload, args.uploads)
-    return {"backend": name, "healthz_reference": reference, "poll": plain, "poll_if_none_match": cond, "uploads": uploads,
-            "worker_running_jobs": [busy_before, busy_after]}
+    ends = [f"{j['status']}:{j['stage']}" + (f":{j['error']['code']}" if j["error"] else "") for j in busy]
+    return {"backend": name, "busy_jobs": ends, "healthz_reference": reference, "poll": plain, "poll_if_none_match": cond, "event_streams": streams,
+            "uploads": uploads, "worker_running_jobs": [busy_before, busy_after]}
 
 
 def main() -> None:
@@ -215,7 +320,8 @@ def main() -> None:
     parser.add_argument("--backends", default="embedded,postgres", help="comma-separated: embedded, postgres")
     parser.add_argument("--seconds", type=float, default=10.0, help="length of each polling run")
     parser.add_argument("--pollers", type=int, default=8, help="concurrent polling clients")
-    parser.add_argument("--busy-jobs", type=int, default=4, help="full-pipeline jobs queued to keep the worker busy")
+    parser.add_argument("--busy-jobs", type=int, default=40, help="full-pipeline jobs queued to keep the worker busy throughout")
+    parser.add_argument("--streams", type=int, default=500, help="event streams held open during the last polling run (0: none)")
     parser.add_argument("--uploads", type=int, default=20, help="concurrent uploads")
     parser.add_argument("--upload-mb", type=float, default=5.0, help="size of each uploaded GLB")
     args = parser.parse_args()
@@ -230,17 +336,28 @@ def main() -> None:
                 rows.append(measure("PostgreSQL + Redis", env, args, upload))
         else:
             parser.error(f"unknown backend {name!r}")
-    print(f"{'backend':<26} {'test':<34} {'rate':>11} {'p50':>9} {'p99':>9}  notes")
+    print(f"{'backend':<20} {'test':<40} {'rate':>9} {'p50':>9} {'p99':>9} {'CPU/req':>9}  notes")
+
+    def line(backend: str, test: str, r: dict, notes: str = "") -> None:
+        print(f"{backend:<20} {test:<40} {r['polls_per_s']:>7}/s {r['p50_ms']:>6} ms {r['p99_ms']:>6} ms "
+              f"{r['server_cpu_ms_per_poll']:>6} ms  {notes}")
+
     for r in rows:
-        h, p, c, u = r["healthz_reference"], r["poll"], r["poll_if_none_match"], r["uploads"]
-        print(f"{r['backend']:<26} {'GET /healthz (reference: no DB)':<34} {h['polls_per_s']:>9}/s {h['p50_ms']:>6} ms {h['p99_ms']:>6} ms")
-        print(f"{r['backend']:<26} {f'GET job ({args.pollers} clients)':<34} {p['polls_per_s']:>9}/s {p['p50_ms']:>6} ms {p['p99_ms']:>6} ms"
-              f"  worker running {r['worker_running_jobs'][0]} job(s) before, {r['worker_running_jobs'][1]} after")
-        print(f"{r['backend']:<26} {'GET job, If-None-Match (304)':<34} {c['polls_per_s']:>9}/s {c['p50_ms']:>6} ms {c['p99_ms']:>6} ms"
-              f"  statuses {c['statuses']}")
+        b = r["backend"].replace(" (SQLite + files)", "")
+        line(b, "GET /healthz (reference: no DB)", r["healthz_reference"])
+        line(b, f"GET job ({args.pollers} clients)", r["poll"],
+             f"worker running {r['worker_running_jobs'][0]} job(s) before, {r['worker_running_jobs'][1]} after; "
+             f"busy jobs at the end: {', '.join(f'{n} {k}' for k, n in Counter(j.split(':')[0] for j in r['busy_jobs']).items())}")
+        line(b, "GET job, If-None-Match (304)", r["poll_if_none_match"], f"statuses {r['poll_if_none_match']['statuses']}")
+        s = r["event_streams"]
+        if s["count"]:
+            line(b, "GET job, again", s["alone"])
+            line(b, f"GET job, {s['count']} event streams open", s["beside"],
+                 f"slow-down p50 {s['slowdown_p50']}x, p99 {s['slowdown_p99']}x, rate {s['rate_ratio']}x; opened in {s['open_s']} s")
+        u = r["uploads"]
         uploads = f"{args.uploads} concurrent {u['size_mb']} MB uploads"
-        print(f"{r['backend']:<26} {uploads:<34} {u['mb_per_s']:>7} MB/s {u['p50_s']:>7} s "
-              f"{u['p99_s']:>7} s  wall {u['wall_s']} s, {u['accepted']} accepted, {u['retries']} retries after 503/429")
+        print(f"{b:<20} {uploads:<40} {u['mb_per_s']:>5} MB/s {u['p50_s']:>7} s {u['p99_s']:>7} s {'':>9}  "
+              f"wall {u['wall_s']} s, {u['accepted']} accepted, {u['retries']} retries after 503/429")
     load = [round(x, 1) for x in (*load_before[:1], os.getloadavg()[0])]
     print(f"1-minute load average before / after: {load[0]} / {load[1]} on {os.cpu_count()} CPUs (other work on the machine "
           "competes with the server and its worker)")
