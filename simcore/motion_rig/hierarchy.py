@@ -22,6 +22,7 @@ class BoneTree:
                whose motion has no pivot with their parent's (`sliding`: the joint at that pair's best point).
     borders:   (B, 3) float64 centre of each bone's border with its parent (the root's, a separate part's: its
                vertices' centre): a point inside the surface near the joint.
+    stiffness: (B, 3, 3) float64 the pair's `BonePairs.stiffness` with the parent (zero where there is no pair).
     """
 
     order: np.ndarray
@@ -30,6 +31,7 @@ class BoneTree:
     floating: np.ndarray
     sliding: np.ndarray
     borders: np.ndarray
+    stiffness: np.ndarray
 
 
 def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: float) -> BoneTree:
@@ -71,7 +73,8 @@ def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: fl
     pivot_of = {(int(x), int(y)): p for (x, y), p, m in zip(pairs.pairs, pairs.pivots, pairs.mismatch) if m <= slide}
     best = {(int(x), int(y)): p for (x, y), p in zip(pairs.pairs, pairs.pivots)}
     border = {(int(x), int(y)): c for (x, y), c in zip(pairs.pairs, pairs.borders)}
-    joints, borders = np.empty((count, 3)), np.empty((count, 3))
+    firm = {(int(x), int(y)): k for (x, y), k in zip(pairs.pairs, pairs.stiffness)}
+    joints, borders, stiffness = np.empty((count, 3)), np.empty((count, 3)), np.zeros((count, 3, 3))
     floating, sliding = np.zeros(count, bool), np.zeros(count, bool)
     for i, bone in enumerate(order):
         up = parent_of[bone]
@@ -80,5 +83,6 @@ def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: fl
         sliding[i] = up >= 0 and key in best and key not in pivot_of
         joints[i] = pivot_of.get(key, best.get(key, centres[bone]))
         borders[i] = border.get(key, centres[bone])
+        stiffness[i] = firm.get(key, np.zeros((3, 3)))
     parents = np.array([index[parent_of[bone]] if parent_of[bone] >= 0 else -1 for bone in order], np.int64)
-    return BoneTree(np.asarray(order, np.int64), parents, joints, floating, sliding, borders)
+    return BoneTree(np.asarray(order, np.int64), parents, joints, floating, sliding, borders, stiffness)

@@ -18,6 +18,8 @@ class BonePairs:
               near zero for a true joint, large for bones that only touch.
     overlap:  (P,) float64 how much skinning the two bones share around their border (vertex-weight products).
     borders:  (P, 3) float64 centre of the pair's border (the overlap-weighted mean of the vertices there).
+    stiffness: (P, 3, 3) float64 how firmly the relative motion pins the pivot, per direction (the per-frame
+              normal matrix of the pivot fit: near zero along a hinge's axis, zero for bones that never bend).
     """
 
     pairs: np.ndarray
@@ -25,6 +27,7 @@ class BonePairs:
     mismatch: np.ndarray
     overlap: np.ndarray
     borders: np.ndarray
+    stiffness: np.ndarray
 
 
 def _vertex_adjacency(faces: np.ndarray, count: int) -> sp.csr_matrix:
@@ -59,9 +62,10 @@ def bone_pairs(rest: np.ndarray, faces: np.ndarray, weights: np.ndarray, transfo
     da = rot[:, a_idx] - rot[:, b_idx]  # (T, P, 3, 3)
     db = trans[:, a_idx] - trans[:, b_idx]  # (T, P, 3)
     frames = transforms.shape[0]
-    lhs = np.einsum("tpki,tpkj->pij", da, da) + pivot_regularisation * frames * np.eye(3)
+    stiffness = np.einsum("tpki,tpkj->pij", da, da) / frames
+    lhs = frames * (stiffness + pivot_regularisation * np.eye(3))
     rhs = -np.einsum("tpki,tpk->pi", da, db) + pivot_regularisation * frames * centres
     pivots = np.linalg.solve(lhs, rhs[..., None])[..., 0]
     gap = np.einsum("tpij,pj->tpi", da, pivots) + db
     mismatch = np.sqrt((gap**2).sum(-1).mean(0))
-    return BonePairs(pairs, pivots, mismatch, share[a_idx, b_idx], centres)
+    return BonePairs(pairs, pivots, mismatch, share[a_idx, b_idx], centres, stiffness)

@@ -24,6 +24,7 @@ from simcore.motion_rig.free_bones import (
 from simcore.motion_rig.hierarchy import BoneTree, bone_tree
 from simcore.motion_rig.joint_animation import joint_animation
 from simcore.motion_rig.joints import bone_pairs
+from simcore.motion_rig.rigid_merge import merge_moving_alike
 from simcore.motion_rig.sequence_weld import seam_triangles
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.types import Skeleton
@@ -55,6 +56,7 @@ class MotionRigParams:
     search_iterations: int = 3  # Dem Bones iterations while choosing the count
     iterations: int = 12  # Dem Bones iterations of the chosen count's fit
     spread: int = 2  # 1-ring steps that make neighbouring bones' regions meet
+    merge_share: float = 0.25  # touching free bones whose motions differ by under this share of the fit error merge
     pivot_regularisation: float = 3e-4
     slide_mismatch: float = 0.01  # share of the diagonal: a bone pair that far from turning about a point slides
     sweeps: int = 48  # at most this many tree transform sweeps per round
@@ -133,17 +135,24 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
     return _free_fit(rest, frames, surface, chosen, params, params.iterations, start), trail
 
 
-def joints_inside(grid: VoxelGrid, tree: BoneTree) -> np.ndarray:
-    """(B, 3) the tree's joints with those outside the solid moved in: to the bone's border with its parent when
-    that is inside, else to the nearest inside voxel. A pivot read off a small relative motion can lie far out
-    (the motion barely decides it); the re-fit's joint steps start there and are pulled back there."""
+def joints_inside(grid: VoxelGrid, tree: BoneTree, loose: float = 0.01) -> np.ndarray:
+    """(B, 3) the tree's joints with those outside the solid moved in along the directions their motion leaves
+    open (stiffness below `loose` × its largest: a hinge's axis, every direction of a pair that never bends):
+    towards the bone's border with its parent, else towards the nearest inside voxel. A joint the motion pins
+    outside stays there (moving it would cost the fit)."""
     joints = tree.joints.copy()
-    outside = ~grid.inside(joints)
-    border = outside & grid.inside(tree.borders)
-    joints[border] = tree.borders[border]
-    rest = outside & ~border
-    if rest.any():
-        joints[rest] = snap_inside(grid, joints[rest])
+    outside = np.flatnonzero(~grid.inside(joints))
+    if not len(outside):
+        return joints
+    snapped = snap_inside(grid, joints[outside])
+    for k, i in enumerate(outside.tolist()):
+        values, vectors = np.linalg.eigh(tree.stiffness[i])
+        free = vectors[:, values <= loose * max(float(values.max()), 1e-12)]
+        for target in (tree.borders[i], snapped[k]):
+            moved = joints[i] + free @ (free.T @ (target - joints[i]))
+            if grid.inside(moved[None])[0]:
+                joints[i] = moved
+                break
     return joints
 
 
@@ -210,15 +219,16 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     free, trail = choose_free_bones(rest, frames, surface, params, progress)
     free_seconds = time.perf_counter() - started
     progress(0.6)
-    pairs = bone_pairs(rest, surface, free.weights, free.transforms, spread=params.spread,
+    free_error = rmse(reconstruct(rest, free.weights, free.transforms), frames) / diag
+    free_total = float(np.sqrt((free_error**2).mean()))
+    bones, merged = merge_moving_alike(rest, surface, free, params.merge_share * free_total * diag)
+    pairs = bone_pairs(rest, surface, bones.weights, bones.transforms, spread=params.spread,
                        pivot_regularisation=params.pivot_regularisation)
-    tree = bone_tree(rest, free.weights, pairs, params.slide_mismatch * diag)
+    tree = bone_tree(rest, bones.weights, pairs, params.slide_mismatch * diag)
     grid = solid_voxels(rest, faces, resolution=params.inside_resolution)
     moved_in = ~grid.inside(tree.joints)
     tree = replace(tree, joints=joints_inside(grid, tree))
-    free_error = rmse(reconstruct(rest, free.weights, free.transforms), frames) / diag
-    weights, transforms, joints, refit = refit_on_tree(rest, frames, surface, free, tree, params,
-                                                       float(np.sqrt((free_error**2).mean())),
+    weights, transforms, joints, refit = refit_on_tree(rest, frames, surface, bones, tree, params, free_total,
                                                        lambda f: progress(0.6 + 0.35 * f))
     weights = weights / np.maximum(weights.sum(axis=1, keepdims=True), 1e-12)
     names = ["root"] + [f"bone_{i:02d}" for i in range(1, len(tree.order))]
@@ -228,6 +238,7 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     report = {
         "bones": skeleton.num_joints,
         "sliding_joints": int(tree.sliding.sum()),
+        "merged_bones": merged,
         "joints_moved_inside": int(moved_in.sum()),
         "joints_outside": int((~grid.inside(joints)).sum()),
         "separate_part_joints": int(tree.floating.sum() - tree.sliding.sum()) - 1,

@@ -90,6 +90,8 @@ def test_refit_rounds_end_at_their_best_round(rig):
 
 
 def test_joints_outside_the_solid_are_moved_inside(tube):
+    from dataclasses import replace
+
     from simcore.geometry.voxelize import solid_voxels
     from simcore.motion_rig.hierarchy import BoneTree
     from simcore.motion_rig.solve import joints_inside
@@ -100,8 +102,13 @@ def test_joints_outside_the_solid_are_moved_inside(tube):
     joints = np.stack([centre, far, far])
     borders = np.stack([centre, centre, far])  # bone 1's border is inside, bone 2's is not
     tree = BoneTree(np.arange(3), np.array([-1, 0, 1]), joints, np.array([True, False, False]),
-                    np.zeros(3, bool), borders)
+                    np.zeros(3, bool), borders, np.zeros((3, 3, 3)))  # no motion pins bones 1, 2
     assert not grid.inside(joints[1:]).any()
     moved = joints_inside(grid, tree)
     assert grid.inside(moved).all()
     assert np.allclose(moved[:2], [centre, centre])  # inside already; the border when that is inside
+    pinned = tree.stiffness.copy()
+    pinned[1] = np.diag([0.0, 1.0, 1.0])  # a hinge along x: only x is left open, and x does not lead inside
+    pinned[2] = np.eye(3)  # a ball joint pinned outside: it stays
+    held = joints_inside(grid, replace(tree, stiffness=pinned))
+    assert np.allclose(held[1:], joints[1:])
