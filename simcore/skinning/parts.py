@@ -62,7 +62,9 @@ def bind_rigid_parts(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_ma
     return out
 
 
-BONE_SAMPLES = 16  # points along each bone, each credited to the part of its nearest vertex
+BONE_SAMPLES = 16  # points along each bone, each credited to the parts whose surface lies about as near as the nearest
+NEAREST = 32  # vertices looked at around each bone point
+LAYER_SLACK = 1.5  # a part within this × the nearest surface's distance of a bone point claims it too (layered clothing)
 MIN_COVERAGE = 0.25  # a joint moves a part only if at least this share of its bones' points lie nearest that part
 
 
@@ -70,8 +72,9 @@ def restrict_to_covering_joints(vertices: np.ndarray, faces: np.ndarray, skeleto
                                 min_coverage: float = MIN_COVERAGE) -> sp.csr_matrix:
     """(V, J) CSR `weights` in which each part of a several-part mesh keeps only the joints whose bones run
     through it: at least `min_coverage` of the points along a joint's bones lie nearest that part's vertices
-    (the part's own stretch of the bone chain). A part no bone runs through keeps the joint covering most of
-    it; a vertex left with no weight keeps its own. Rows are renormalised."""
+    (the part's own stretch of the bone chain); a point is credited to every part whose surface lies within
+    LAYER_SLACK × the nearest surface's distance of it, so layers over one limb share it. A part no bone runs
+    through keeps its weights, and so does a vertex left with none. Rows are renormalised."""
     labels = part_labels(vertices, faces)
     count = int(labels.max()) + 1 if len(labels) else 0
     if count < 2:
@@ -80,12 +83,17 @@ def restrict_to_covering_joints(vertices: np.ndarray, faces: np.ndarray, skeleto
     t = (np.arange(BONE_SAMPLES) + 0.5) / BONE_SAMPLES
     points = (seg.heads[:, None] + t[None, :, None] * (seg.tails - seg.heads)[:, None]).reshape(-1, 3)
     owner = np.repeat(seg.owner, BONE_SAMPLES)
-    part = labels[cKDTree(vertices).query(points)[1]]
+    k = min(NEAREST, len(vertices))
+    dist, index = cKDTree(vertices).query(points, k=k)
+    dist, index = dist.reshape(len(points), k), index.reshape(len(points), k)
+    near = dist <= LAYER_SLACK * dist[:, :1] + 1e-12  # every layer about as near as the nearest surface claims the point
+    claims = np.zeros((len(points), count), bool)
+    claims[np.repeat(np.arange(len(points)), k)[near.ravel()], labels[index.ravel()][near.ravel()]] = True
     hits = np.zeros((count, skeleton.num_joints))
-    np.add.at(hits, (part, owner), 1.0)
+    np.add.at(hits.T, owner, claims.astype(np.float64))
     coverage = hits / np.maximum(np.bincount(owner, minlength=skeleton.num_joints), 1)[None, :]
     allowed = coverage >= min_coverage
-    allowed[np.arange(count), coverage.argmax(axis=1)] = True
+    allowed[~allowed.any(axis=1)] = True  # no bone runs through the part (a plate over a limb's skin): it keeps its weights
     w = sp.csr_matrix(weights, copy=True)
     rows = np.repeat(np.arange(w.shape[0]), np.diff(w.indptr))
     data = np.where(allowed[labels[rows], w.indices], w.data, 0.0)
