@@ -48,12 +48,11 @@ def learned_weights(
     out = np.zeros((len(inputs.candidates), skeleton.num_joints))
     with torch.no_grad():
         bones = model.bones(torch.from_numpy(inputs.bone))
-        tokens = model.shape(torch.from_numpy(inputs.point), torch.from_numpy(inputs.candidates[:, 0]), bones)
         for start in range(0, len(out), CHUNK):
             rows = slice(start, start + CHUNK)
             cand = torch.from_numpy(inputs.candidates[rows])
             logits = model.logits(torch.from_numpy(inputs.pair[rows]), bones, torch.from_numpy(inputs.point[rows]), cand,
-                                  torch.from_numpy(inputs.prior[rows]), tokens)
+                                  torch.from_numpy(inputs.prior[rows]))
             np.put_along_axis(out[rows], inputs.candidates[rows], torch.softmax(logits, dim=-1).double().numpy(), axis=1)
             if (start // CHUNK) % PROGRESS_EVERY == 0:
                 progress(0.7 + 0.3 * min(1.0, (start + CHUNK) / len(out)))

@@ -16,14 +16,9 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         "Inputs are each vertex's 16 geodesically nearest joints with distance and tree features (simcore/skinning/pair_features.py);",
         "the output refines the geodesic voxel binding's log-weights (an untrained model reproduces them).",
     ]
-    tokens = train["model"].get("tokens", 0)
-    if tokens:
-        about.append(f"Each vertex also reads the mesh's shape through {tokens} farthest-point-sampled shape tokens (distance-biased "
-                     "cross-attention).")
     data = [
         corpus_line(data_config),
-        (f"- {data_config['anny_bodies']} `anny` bodies (random phenotype; Mixamo and game-engine rigs), {data_config['anny_variants']} variants each"
-         if data_config["anny_bodies"] else "- no `anny` bodies"),
+        f"- {data_config['anny_bodies']} `anny` bodies (random phenotype; Mixamo and game-engine rigs), {data_config['anny_variants']} variants each",
         f"- {data_config['variants']} variants of each corpus character: the bind pose, frames of its own clips and random poses "
         f"(±{data_config['pose_degrees']:g}°/√3 per axis) skinned with the artist weights, mid-edge subdivision on every other variant, "
         "a random turn about up and scale in [0.5, 2]",
@@ -33,7 +28,6 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
     ]
     training = [
         f"- steps {train['steps']}, batch {train['batch']} samples × {train['points']} vertices, AdamW lr {train['lr']} (one-cycle), "
-        f"weight decay {train.get('weight_decay', 0.0)}, dropout {train['model'].get('dropout', 0.0)}, "
         f"loss L1 + {train['kl']} × CE + {train['deform']} × deformation, seed {train['seed']}",
         f"- network: {json.dumps(train['model'])}; {weights.stat().st_size / 1e6:.2f} MB",
         hardware_line(summary),

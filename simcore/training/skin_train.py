@@ -6,7 +6,6 @@ predicted and artist weights (mass outside the candidates counts as error), `kl`
 `deform` × the distance between the vertex skinned with predicted and with artist weights in random poses
 (unit-cube units). Every `val_every` steps the model is scored on all `val` samples (mean L1 and deformation);
 the best state by val L1 is what gets saved. One JSON line per step block and per validation goes to the log.
-Shape tokens (ModelConfig.tokens) are drawn from the whole sample, not from the step's vertices.
 """
 
 from __future__ import annotations
@@ -21,7 +20,7 @@ import numpy as np
 import torch
 
 from simcore.model_weights import save_weights
-from simcore.skinning.attention_model import ModelConfig, SkinAttention, farthest_points
+from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.training.skin_samples import SkinSample
 
 
@@ -69,18 +68,9 @@ def _rows(sample: Tensors, rows: torch.Tensor | None) -> Tensors:
     return out
 
 
-def sample_losses(model: SkinAttention, sample: Tensors, rows: torch.Tensor | None = None,
-                  rng: np.random.Generator | None = None) -> dict[str, torch.Tensor]:
-    """Mean L1, cross-entropy and deformation of one sample's rows (all rows when None). Shape tokens come from the
-    whole sample, as at inference from the whole mesh; with `rng` their farthest-point sampling starts at a random
-    vertex (augmentation), without it where inference starts."""
-    bones = model.bones(sample["bone"])
-    index = None
-    if model.config.tokens and rng is not None:
-        index = farthest_points(sample["point"][:, :3], model.config.tokens, start=int(rng.integers(len(sample["point"]))))
-    tokens = model.shape(sample["point"], sample["candidates"][:, 0], bones, index)
-    s = _rows(sample, rows)
-    p = torch.softmax(model.logits(s["pair"], bones, s["point"], s["candidates"], s["prior"], tokens), dim=-1)
+def sample_losses(model: SkinAttention, s: Tensors) -> dict[str, torch.Tensor]:
+    """Mean L1, cross-entropy and deformation of one sample's rows."""
+    p = model(s["pair"], s["bone"], s["point"], s["candidates"], s["prior"])
     l1 = ((p - s["target"]).abs().sum(dim=1) + s["outside"]).mean()
     ce = -(s["target"] * torch.log(p + 1e-8)).sum(dim=1).mean()
     skinned = (p[None, :, :, None] * s["moved"]).sum(dim=2)
@@ -127,7 +117,7 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
                 s = train[index]
                 n = len(s["target"])
                 rows = torch.from_numpy(rng.choice(n, size=config.points, replace=False)) if n > config.points else None
-                parts = sample_losses(model, s, rows, rng)
+                parts = sample_losses(model, _rows(s, rows))
                 total = parts["l1"] + config.kl * parts["ce"] + config.deform * parts["deform"]
                 loss = loss + total / config.batch
                 for k in ("l1", "ce", "deform"):

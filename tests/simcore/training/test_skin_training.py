@@ -6,27 +6,23 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch
 
 from simcore.model_weights import ModelUnavailable
-from simcore.skinning.attention_model import ModelConfig, SkinAttention, farthest_points
+from simcore.skinning.attention_model import ModelConfig
 from simcore.skinning.learned import learned_weights, load_model
-from simcore.skinning.pair_features import skin_inputs
 from simcore.training.sample_cache import save_sample
 from simcore.training.skin_samples import make_sample, variants
 from simcore.training.skin_train import TrainConfig, train_skin
 from tests.simcore.training.creatures import capsule_dog
 
 
-@pytest.mark.parametrize("shape", [{}, {"tokens": 8, "dropout": 0.1}], ids=["local", "shape-tokens"])
-def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path, shape: dict) -> None:
+def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path) -> None:
     creature = capsule_dog()
     rng = np.random.default_rng(0)
     for k, c in enumerate(variants(creature, rng, 3, 30.0)):
         save_sample(tmp_path / "data" / "train" / f"dog_{k}.npz", make_sample(c, rng, 600).arrays())
     save_sample(tmp_path / "data" / "val" / "dog.npz", make_sample(creature, rng, 600).arrays())
-    tiny = ModelConfig(width=16, heads=2, bone_layers=1, **shape)
-    config = TrainConfig(steps=40, batch=2, points=256, lr=5e-3, val_every=20, log_every=10, model=tiny)
+    config = TrainConfig(steps=40, batch=2, points=256, lr=5e-3, val_every=20, log_every=10, model=ModelConfig(width=16, heads=2, bone_layers=1))
     out = tmp_path / "model.safetensors"
     summary = train_skin(config, tmp_path / "data", out, tmp_path / "log.jsonl", lambda step, total, entry: None)
     assert summary["val"]["l1"] < summary["val_at_start"]["l1"] - 0.02  # better than the geodesic prior it starts from
@@ -35,23 +31,6 @@ def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path, shape: d
     assert weights.shape == (len(creature.vertices), creature.skeleton.num_joints)
     np.testing.assert_allclose(weights.sum(axis=1), 1.0, atol=1e-6)
     assert np.all(weights >= 0)
-
-
-def test_untrained_model_with_shape_tokens_is_the_geodesic_prior() -> None:
-    creature = capsule_dog()
-    inputs = skin_inputs(creature.vertices, creature.faces, creature.skeleton)
-    model = SkinAttention(ModelConfig(width=16, heads=2, bone_layers=1, tokens=8)).eval()
-    with torch.no_grad():
-        weights = model(*(torch.from_numpy(a) for a in (inputs.pair, inputs.bone, inputs.point, inputs.candidates, inputs.prior)))
-    np.testing.assert_allclose(weights.numpy(), torch.softmax(torch.from_numpy(inputs.prior), dim=-1).numpy(), atol=1e-6)
-
-
-def test_farthest_points_spread_over_the_shape() -> None:
-    rng = np.random.default_rng(0)
-    cloud = torch.from_numpy(np.concatenate([rng.normal(0.0, 0.01, (990, 3)), rng.normal(1.0, 0.01, (10, 3))]).astype(np.float32))
-    index = farthest_points(cloud, 4)
-    assert len(set(index.tolist())) == 4
-    assert int((index >= 990).sum()) >= 1  # the small far cluster gets a token although it has 1 % of the points
 
 
 @pytest.mark.parametrize("content", [None, b"not a safetensors file"])
