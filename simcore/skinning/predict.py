@@ -23,7 +23,7 @@ from simcore.skeleton.types import Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import learned_summary, learned_weights
-from simcore.skinning.parts import respect_parts
+from simcore.skinning.parts import bind_rigid_parts
 from simcore.skinning.postprocess import smooth_on_surface, top_k
 from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
 from simcore.skinning.quality import quality_scores
@@ -92,8 +92,8 @@ def compute_weights(
 ) -> SkinningResult:
     """Skinning weights of a mesh for a skeleton in the same space.
 
-    vertices: (V, 3) float, faces: (F, 3) int, skeleton: J joints. Every method's weights end with separate
-    mesh parts following the bones that run through them, one joint alone where one dominates (parts.py).
+    vertices: (V, 3) float, faces: (F, 3) int, skeleton: J joints. Every method's weights end with each separate
+    mesh part that leans mostly on one joint bound to that joint alone (parts.py).
     `auto` takes the learned model, which scores better than the hand-written methods on the corpus's `val`
     split (its file carries those figures); when its weights cannot be read, `auto` runs geodesic and heat
     and keeps the lower unsupervised `score`.
@@ -153,7 +153,7 @@ def compute_weights(
             raise
     best = min(chosen, key=lambda name: scores[name]["score"])
     weights = transfer(results[best], v, mesh.vertices, max_influences) if on_proxy else results[best]
-    weights = respect_parts(mesh.vertices, mesh.faces, skeleton, weights)  # separate pieces follow their own bones
+    weights = bind_rigid_parts(mesh.vertices, mesh.faces, weights)  # separate pieces mostly on one joint follow it
     return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
 
 

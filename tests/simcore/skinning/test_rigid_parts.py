@@ -39,35 +39,3 @@ def test_a_one_piece_mesh_keeps_its_weights():
     dense = np.array([[0.9, 0.1], [0.8, 0.2], [0.7, 0.3], [0.9, 0.1]])
     out = bind_rigid_parts(TETRA, TETRA_FACES, sp.csr_matrix(dense))
     assert np.allclose(out.toarray(), dense)
-
-
-def _box(lo: list[float], hi: list[float], n: int = 5) -> tuple[np.ndarray, np.ndarray]:
-    """Surface grid points of an axis-aligned box (n per side) and a triangle soup over them (one part)."""
-    axes = [np.linspace(a, b, n) for a, b in zip(lo, hi, strict=True)]
-    g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    on_face = np.any(np.isclose(g, lo) | np.isclose(g, hi), axis=1)
-    pts = g[on_face]
-    order = np.arange(len(pts))
-    faces = np.stack([order, np.roll(order, -1), np.roll(order, -2)], axis=1)  # a strip: connects every point
-    return pts, faces
-
-
-def test_a_part_keeps_only_the_joints_whose_bones_run_through_it():
-    """Torso piece above a leg piece; the hip joint sits at the torso's bottom edge and its bone runs down the
-    leg: the torso drops the hip's weight, the leg drops the root's, and each then follows one joint alone."""
-    from simcore.skeleton.types import Skeleton
-    from simcore.skinning.parts import respect_parts, restrict_to_covering_joints
-
-    torso, tf = _box([-0.2, 1.0, -0.1], [0.2, 1.6, 0.1])
-    leg, lf = _box([-0.08, 0.1, -0.08], [0.08, 0.95, 0.08])
-    v, f = np.vstack([torso, leg]), np.vstack([tf, lf + len(torso)])
-    skel = Skeleton(np.array([[0.0, 1.3, 0.0], [0.0, 1.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.1, 0.0]]),
-                    np.array([-1, 0, 1, 2]), ["root", "hip", "knee", "ankle"]).validate()
-    dense = np.zeros((len(v), 4))
-    dense[: len(torso)] = [0.45, 0.35, 0.2, 0.0]  # the torso leans on the hip and knee too
-    dense[len(torso):] = [0.2, 0.3, 0.3, 0.2]  # the leg leans on the root
-    out = restrict_to_covering_joints(v, f, skel, sp.csr_matrix(dense)).toarray()
-    assert np.allclose(out[: len(torso)], [1.0, 0.0, 0.0, 0.0])
-    assert np.allclose(out[len(torso):], [0.0, 0.375, 0.375, 0.25])
-    rigid = respect_parts(v, f, skel, sp.csr_matrix(dense)).toarray()
-    assert np.allclose(rigid[len(torso):], out[len(torso):])  # no joint holds half the leg: it keeps a blend
