@@ -8,7 +8,7 @@ Defaults are sized for 2 CPU cores (grid 32, 3k particles, 5 iterations per phas
 paper's settings (e.g. --grid 100 --substeps 100 --material-iters 20 --velocity-iters 30 --particles 50000
 on a GPU). Ablations: --no-learn-mixing, --material-iters 0 (no material phase), --drivers virtual,
 --drive velocity (the paper's open-loop integrated velocities instead of driving points aimed at per-frame anchors),
---no-initial-motion (the body starts at rest).
+--initial-motion (particles start with their joints' motion; off by default).
 
     rigforge fit ../shared/assets/dev/meshseq_horse.glb ../shared/assets/dev/meshseq_flamingo.glb --json out.json
 """
@@ -48,7 +48,7 @@ def fit(
     joints: Annotated[int, typer.Option(help="virtual joints, or the predicted skeleton's joints at most")] = 24,
     learn_mixing: Annotated[bool, typer.Option(help="learn prototype centres, axes and radii with E")] = True,
     drive: Annotated[str, typer.Option(help="anchored (driving points aimed at per-frame anchors) or velocity (open loop)")] = "anchored",
-    initial_motion: Annotated[bool, typer.Option(help="particles start with their joints' motion (else at rest)")] = True,
+    initial_motion: Annotated[bool, typer.Option(help="particles start with their joints' motion (else at rest)")] = False,
     cycles: Annotated[int, typer.Option(help="alternating cycles")] = 3,
     material_iters: Annotated[int, typer.Option(help="AdamW steps per material phase (paper: 20)")] = 5,
     velocity_iters: Annotated[int, typer.Option(help="SGD steps per frame per velocity phase (paper: 30)")] = 5,

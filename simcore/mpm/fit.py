@@ -26,9 +26,10 @@ the interval is the one that reaches its anchor at the interval's end (`anchors`
 fitted to that target frame) plus a fitted correction in cells; the correction is what SGD fits, and an
 interval's error is corrected by the next one instead of accumulating. The material phase treats the
 feedback as fixed within an iteration (no gradient through the driving points' start positions).
-Initial motion (`initial_motion`, our choice): a sequence rarely starts at rest, so the particles start with the
-velocity their joints' fitted motion gives them over the first interval (coarse weights of the particle's nearest
-target vertices, or the virtual joints' falloff), instead of at rest while the driving points already move.
+Initial motion (`initial_motion`, our choice, off by default): the particles may start with the velocity their
+joints' fitted motion gives them over the first interval (coarse weights of the particle's nearest target vertices,
+or the virtual joints' falloff) instead of at rest. Measured over both dev sequences it does not help on the whole,
+so the body starts at rest unless asked.
 """
 
 from __future__ import annotations
@@ -75,7 +76,7 @@ class FitConfig:
     max_joints: int = 24  # skeleton drivers: joints of the predicted skeleton at most
     learn_mixing: bool = True  # material phase also learns prototype centres, axes and radii
     drive: str = "anchored"  # "anchored" (closed loop on per-frame anchors) or "velocity" (open loop)
-    initial_motion: bool = True  # particles start with their joints' motion over the first interval
+    initial_motion: bool = False  # particles start with their joints' motion over the first interval (off: at rest)
 
 
 @dataclass
