@@ -73,8 +73,12 @@ def _descends(parents: np.ndarray, j: int, root: int) -> bool:
     return False
 
 
-def dev_skeletons(dev_assets: Path) -> list[tuple[str, Skeleton, np.ndarray]]:
-    """(name, used-joint skeleton, mesh vertices) of every rigged dev asset our reader accepts."""
+MAX_TOKENIZED_JOINTS = 256  # the learned models' bone limit; larger rigs get a clear too-many-tokens error
+
+
+def dev_skeletons(dev_assets: Path, max_joints: int | None = None) -> list[tuple[str, Skeleton, np.ndarray]]:
+    """(name, used-joint skeleton, mesh vertices) of every rigged dev asset our reader accepts, leaving out
+    skeletons with more than `max_joints` used joints (a file of hundreds of characters) when it is given."""
     out = []
     for path in sorted(dev_assets.glob("*.gl*")):
         try:
@@ -82,6 +86,8 @@ def dev_skeletons(dev_assets: Path) -> list[tuple[str, Skeleton, np.ndarray]]:
         except InvalidInput:
             continue  # meshseq_* carry no skin
         keep = np.flatnonzero(used_joints(asset.skeleton, asset.weights))
+        if max_joints is not None and len(keep) > max_joints:
+            continue
         remap = -np.ones(asset.skeleton.num_joints, np.int64)
         remap[keep] = np.arange(len(keep))
         sk = asset.skeleton

@@ -9,7 +9,7 @@ from simcore.errors import InvalidInput
 from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 from simcore.skeleton.vocab import BOS, BRANCH, CLASS_TOKENS, EOS, NUM_BINS, PAD, PART_BODY, PART_HAND, SPRING
-from tests.simcore.skeleton.skeleton_samples import dev_skeletons, random_tree
+from tests.simcore.skeleton.skeleton_samples import MAX_TOKENIZED_JOINTS, dev_skeletons, random_tree
 
 IDENTITY = Normalization(np.zeros(3), 1.0)
 SPECIALS = np.arange(NUM_BINS, 267)
@@ -54,7 +54,7 @@ def test_true_sequences_of_dev_and_random_skeletons_are_allowed(dev_assets) -> N
     grammar = SkeletonGrammar()
     tok = SkeletonTokenizer()
     sequences = []
-    for _, skel, vertices in dev_skeletons(dev_assets):
+    for _, skel, vertices in dev_skeletons(dev_assets, MAX_TOKENIZED_JOINTS):
         sequences.append(tok.encode(skel, Normalization.from_points(np.concatenate([vertices, skel.positions]))))
     rng = np.random.default_rng(5)
     for trial in range(300):

@@ -21,7 +21,7 @@ from simcore.skeleton.vocab import (
     dequantize,
     quantize,
 )
-from tests.simcore.skeleton.skeleton_samples import dev_skeletons, random_tree
+from tests.simcore.skeleton.skeleton_samples import MAX_TOKENIZED_JOINTS, dev_skeletons, random_tree
 
 HALF_BIN = 1.0 / 256
 IDENTITY = Normalization(np.zeros(3), 1.0)
@@ -107,7 +107,7 @@ def test_random_trees_with_templates_and_springs_round_trip() -> None:
 def test_dev_skeletons_round_trip_and_report_saving(dev_assets) -> None:
     naive = optimised = 0
     names = []
-    for name, skel, vertices in dev_skeletons(dev_assets):
+    for name, skel, vertices in dev_skeletons(dev_assets, MAX_TOKENIZED_JOINTS):
         norm = Normalization.from_points(np.concatenate([vertices, skel.positions]))
         tokens = assert_round_trip(skel, norm)
         plan = TOK.plan(skel, norm)
