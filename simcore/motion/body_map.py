@@ -12,19 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import Skeleton, is_at_or_below
 from simcore.skinning.bones import joint_distances, joint_segments
 
 SAMPLES = (0.25, 0.5, 0.75)  # points along each target bone compared with the source's bones
-
-
-def _is_at_or_below(parents: np.ndarray, a: int, b: int) -> bool:
-    """a is b or one of b's descendants."""
-    while a >= 0:
-        if a == b:
-            return True
-        a = int(parents[a])
-    return False
 
 
 def _region_cost(source: Skeleton, target: Skeleton) -> np.ndarray:
@@ -66,8 +57,8 @@ def fill_by_region(source: Skeleton, target: Skeleton, mapping: dict[int, int]) 
             above, p = out.get(p), int(target.parents[p])
         below = _mapped_below(target, mapping, j)
         candidates = [s for s in range(source.num_joints)
-                      if (above is None or _is_at_or_below(source.parents, s, above))
-                      and all(_is_at_or_below(source.parents, d, s) for d in below)]
+                      if (above is None or is_at_or_below(source.parents, s, above))
+                      and all(is_at_or_below(source.parents, d, s) for d in below)]
         if candidates and (above is not None or below):
             out[j] = min(candidates, key=lambda s: cost[j, s])
     return out

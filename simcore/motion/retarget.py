@@ -39,7 +39,7 @@ from simcore.motion.types import JointAnimation, MotionClip
 from simcore.options import MotionOptions
 from simcore.skeleton import kinematics
 from simcore.skeleton.mixamo import BODY_JOINTS
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import Skeleton, is_at_or_below
 
 MIN_BODY_SLOTS = 8  # shared Mixamo body slots needed to trust name matching over structure
 CONTACT_BAND = 0.05  # joints within this fraction of the height above the lowest one touch the floor
@@ -139,7 +139,7 @@ def one_pivot_per_source_joint(source: Skeleton, target: Skeleton, mapping: dict
     for s, ts in shared.items():
         keep = min(ts, key=lambda t: float(np.linalg.norm(pt[t] - ps[s])))
         for t in ts:
-            if len(children[t]) == 1 and _is_descendant(target.parents, keep, t):
+            if len(children[t]) == 1 and keep != t and is_at_or_below(target.parents, keep, t):
                 del out[t]
     return out
 
@@ -167,15 +167,6 @@ def rotation_between(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return Rotation.from_rotvec(axis / sin * np.arctan2(sin, cos)).as_matrix()
 
 
-def _is_descendant(parents: np.ndarray, a: int, b: int) -> bool:
-    """a is a proper descendant of b."""
-    while parents[a] >= 0:
-        a = int(parents[a])
-        if a == b:
-            return True
-    return False
-
-
 def _rest_alignment(source: Skeleton, s_rest: np.ndarray, target: Skeleton, mapping: dict[int, int]) -> list[np.ndarray | None]:
     """A_j per target joint (None: unmapped or no bone to align, inherit the parent's)."""
     children_t, children_s = target.children(), source.children()
@@ -185,7 +176,7 @@ def _rest_alignment(source: Skeleton, s_rest: np.ndarray, target: Skeleton, mapp
         while stack:  # nearest mapped descendants whose source lies below s
             c = stack.pop()
             sc = mapping.get(c)
-            if sc is not None and sc != s and _is_descendant(source.parents, sc, s):
+            if sc is not None and sc != s and is_at_or_below(source.parents, sc, s):
                 u.append(target.positions[c] - target.positions[j])
                 v.append(s_rest[sc] - s_rest[s])
             elif sc is None or sc == s:

@@ -10,6 +10,15 @@ import numpy as np
 from simcore.errors import InvalidInput
 
 
+def is_at_or_below(parents: np.ndarray, a: int, b: int) -> bool:
+    """Joint a is joint b or one of b's descendants in the tree `parents` ((J,) int, -1 for a root)."""
+    while a >= 0:
+        if a == b:
+            return True
+        a = int(parents[a])
+    return False
+
+
 def parents_first_order(parents: np.ndarray) -> np.ndarray:
     """(J,) int64 permutation listing every joint after its parent; the identity when that already holds (each
     pass takes, in index order, the joints whose parent is placed). Raises InvalidInput on a cycle or a parent

@@ -12,7 +12,7 @@ from simcore.errors import InvalidInput
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import read_rigged_asset, used_joints
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
-from simcore.skeleton.types import JointKind, Skeleton
+from simcore.skeleton.types import JointKind, Skeleton, is_at_or_below
 from simcore.skeleton.vocab import quantize
 
 
@@ -59,18 +59,10 @@ def random_tree(rng: np.random.Generator, joints: int, *, template: str = "none"
     roots: np.ndarray | list[int] = rng.choice(candidates, size=min(spring_roots, len(candidates)), replace=False) if len(candidates) else []
     for root in roots:
         for j in range(int(root), len(names)):
-            if _descends(parents_arr, j, int(root)):
+            if is_at_or_below(parents_arr, j, int(root)):
                 kinds[j] = JointKind.SPRING
     positions = distinct_bin_positions(rng, len(names))
     return Skeleton(positions, parents_arr, names, kinds).validate()
-
-
-def _descends(parents: np.ndarray, j: int, root: int) -> bool:
-    while j >= 0:
-        if j == root:
-            return True
-        j = int(parents[j])
-    return False
 
 
 MAX_TOKENIZED_JOINTS = 256  # the learned models' bone limit; larger rigs get a clear too-many-tokens error
