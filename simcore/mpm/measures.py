@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
+
+from simcore.geometry.laplacian import adjacency
+from simcore.geometry.weld import weld_vertices
 
 
 def signed_volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -25,22 +29,14 @@ def signed_volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
 def volume_parts(vertices: np.ndarray, faces: np.ndarray, weld: float = 1e-6) -> np.ndarray:
     """(F,) int64 part of each face: connected components of the surface with vertices closer than `weld` × the
     mesh size merged first (seams that split vertices do not split a part)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     v = np.asarray(vertices, np.float64)
     faces = np.asarray(faces, np.int64)
     if len(faces) == 0:
         return np.zeros(0, np.int64)
     size = float(np.ptp(v, axis=0).max()) or 1.0
-    _, welded = np.unique(np.round(v / (weld * size)).astype(np.int64), axis=0, return_inverse=True)
-    welded = welded.reshape(-1)
-    f = welded[faces]
-    n = int(welded.max()) + 1
-    edges = coo_matrix((np.ones(2 * len(f)), (np.concatenate([f[:, 0], f[:, 1]]), np.concatenate([f[:, 1], f[:, 2]]))),
-                       shape=(n, n))
-    _, labels = connected_components(edges, directed=False)
-    return labels[f[:, 0]].astype(np.int64)
+    welded = weld_vertices(v, faces, weld * size).index[faces]  # degenerate faces kept: every face gets a part
+    _, labels = connected_components(adjacency(welded, int(welded.max()) + 1), directed=False)
+    return labels[welded[:, 0]].astype(np.int64)
 
 
 def part_volumes(frames: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) -> np.ndarray:
