@@ -226,8 +226,9 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
                        pivot_regularisation=params.pivot_regularisation)
     tree = bone_tree(rest, bones.weights, pairs, params.slide_mismatch * diag)
     grid = solid_voxels(rest, faces, resolution=params.inside_resolution)
-    moved_in = ~grid.inside(tree.joints)
-    tree = replace(tree, joints=joints_inside(grid, tree))
+    inside = joints_inside(grid, tree)
+    moved_in = np.any(inside != tree.joints, axis=1)  # joints outside the solid that could be moved in
+    tree = replace(tree, joints=inside)
     weights, transforms, joints, refit = refit_on_tree(rest, frames, surface, bones, tree, params, free_total,
                                                        lambda f: progress(0.6 + 0.35 * f))
     weights = weights / np.maximum(weights.sum(axis=1, keepdims=True), 1e-12)

@@ -28,8 +28,8 @@ interval's error is corrected by the next one instead of accumulating. The mater
 feedback as fixed within an iteration (no gradient through the driving points' start positions).
 Initial motion (`initial_motion`, our choice, off by default): the particles may start with the velocity their
 joints' fitted motion gives them over the first interval (coarse weights of the particle's nearest target vertices,
-or the virtual joints' falloff) instead of at rest. Measured over both dev sequences it does not help on the whole,
-so the body starts at rest unless asked.
+or the virtual joints' falloff) instead of at rest. It has not helped in the sequences measured, so the
+body starts at rest unless asked.
 """
 
 from __future__ import annotations
