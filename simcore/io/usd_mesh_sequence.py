@@ -63,7 +63,7 @@ def _meshes(stage: Any) -> list[Any]:  # noqa: ANN401
 
 def _triangles(mesh: Any, points: int) -> np.ndarray:  # noqa: ANN401
     """(F, 3) int64 fan triangulation of the mesh's polygons (right-handed winding)."""
-    from pxr import UsdGeom
+    from pxr import Usd, UsdGeom
 
     counts_attr, index_attr = mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr()
     for attr in (counts_attr, index_attr):
@@ -73,8 +73,9 @@ def _triangles(mesh: Any, points: int) -> np.ndarray:  # noqa: ANN401
             if any(not np.array_equal(np.asarray(attr.Get(t)), first) for t in samples[1:]):
                 raise _fail(f"{mesh.GetPath()} changes its faces over time: every frame must keep one topology",
                             "sequence_topology_mismatch")
-    counts = np.asarray(counts_attr.Get() or [], np.int64)
-    indices = np.asarray(index_attr.Get() or [], np.int64)
+    first = Usd.TimeCode.EarliestTime()  # the default value, or the first sample of a time-sampled topology
+    counts = np.asarray(counts_attr.Get(first) or [], np.int64)
+    indices = np.asarray(index_attr.Get(first) or [], np.int64)
     if len(counts) == 0 or counts.min() < 3 or counts.sum() != len(indices):
         raise _fail(f"{mesh.GetPath()} has malformed faces (a face with under 3 corners, or counts that do not "
                     "match the indices)")

@@ -124,6 +124,22 @@ def test_points_that_change_count_are_a_topology_mismatch(tube, tmp_path):
     assert err.value.code == "sequence_topology_mismatch" and err.value.field == "mesh"
 
 
+def test_faces_authored_as_time_samples_are_read(tube, tmp_path):
+    from pxr import Usd, UsdGeom, Vt
+
+    path = usd_sequence(tmp_path / "t.usdc", tube.frames, tube.faces)
+    stage = Usd.Stage.Open(str(path))
+    mesh = UsdGeom.Mesh.Get(stage, "/Root/Body")
+    for attr in (mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr()):  # samples only, no default
+        value = attr.Get()
+        attr.Clear()
+        for t in range(len(tube.frames)):
+            attr.Set(Vt.IntArray(list(value)), Usd.TimeCode(t))
+    stage.GetRootLayer().Save()
+    seq = _read(path)
+    assert seq is not None and np.array_equal(seq.sequence.faces, tube.faces)
+
+
 def test_nan_points_are_refused(tube, tmp_path):
     frames = tube.frames.copy()
     frames[4, 2, 0] = np.nan
