@@ -17,7 +17,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from simcore.geometry.laplacian import adjacency
-from simcore.geometry.weld import weld_vertices
+from simcore.geometry.weld import WeldedMesh, weld_vertices
 
 RIGID_SHARE = 0.5  # a part with at least this share of its weight mass on one joint follows that joint alone
 MAX_PIECE = 0.35  # only parts whose box diagonal is at most this share of the whole mesh's are pieces
@@ -36,15 +36,20 @@ def _part_sizes(vertices: np.ndarray, labels: np.ndarray, count: int) -> np.ndar
 def part_labels(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(V,) int64 connected-component label of each vertex of the welded surface (seam duplicates share one)."""
     welded = weld_vertices(vertices, faces)
-    _, label = connected_components(adjacency(welded.faces, len(welded.vertices)), directed=False)
+    return welded_part_labels(welded, adjacency(welded.faces, len(welded.vertices)))
+
+
+def welded_part_labels(welded: WeldedMesh, adj: sp.spmatrix) -> np.ndarray:
+    """`part_labels` from a weld and its vertex adjacency that the caller already has."""
+    _, label = connected_components(adj, directed=False)
     return np.asarray(label, np.int64)[welded.index]
 
 
-def bind_rigid_parts(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix, share: float = RIGID_SHARE,
+def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_matrix, share: float = RIGID_SHARE,
                      max_size: float = MAX_PIECE) -> sp.csr_matrix:
     """(V, J) CSR `weights` with every part that puts at least `share` of its weight mass on one joint bound to
-    that joint alone (see the module docstring). vertices (V, 3), faces (F, 3) int: the mesh the weights are for."""
-    labels = part_labels(vertices, faces)
+    that joint alone (see the module docstring). vertices (V, 3): the mesh the weights are for; labels (V,) int:
+    its `part_labels`."""
     count = int(labels.max()) + 1 if len(labels) else 0
     if count < 2:
         return weights

@@ -23,7 +23,7 @@ from simcore.skeleton.types import Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import learned_summary, learned_weights
-from simcore.skinning.parts import bind_rigid_parts
+from simcore.skinning.parts import bind_rigid_parts, part_labels, welded_part_labels
 from simcore.skinning.postprocess import smooth_on_surface, top_k
 from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
 from simcore.skinning.quality import quality_scores
@@ -153,7 +153,9 @@ def compute_weights(
             raise
     best = min(chosen, key=lambda name: scores[name]["score"])
     weights = transfer(results[best], v, mesh.vertices, max_influences) if on_proxy else results[best]
-    weights = bind_rigid_parts(mesh.vertices, mesh.faces, weights)  # separate pieces mostly on one joint follow it
+    # separate pieces mostly on one joint follow it; the parts come from the weld above unless that was the proxy's
+    labels = part_labels(mesh.vertices, mesh.faces) if on_proxy else welded_part_labels(welded, adj)
+    weights = bind_rigid_parts(mesh.vertices, labels, weights)
     return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
 
 

@@ -29,7 +29,7 @@ def test_a_part_mostly_on_one_joint_follows_it_alone():
     dense = np.zeros((8, 3))
     dense[:4] = [[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]]  # 67.5 % on joint 0
     dense[4:] = [[0.4, 0.3, 0.3], [0.2, 0.4, 0.4], [0.3, 0.3, 0.4], [0.4, 0.3, 0.3]]  # at most 35 % on one joint
-    out = bind_rigid_parts(v, f, sp.csr_matrix(dense), max_size=1.0).toarray()
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), max_size=1.0).toarray()
     assert np.array_equal(out[:4], np.tile([1.0, 0.0, 0.0], (4, 1)))
     assert np.allclose(out[4:], dense[4:])
     assert np.allclose(out.sum(axis=1), 1.0)
@@ -37,7 +37,7 @@ def test_a_part_mostly_on_one_joint_follows_it_alone():
 
 def test_a_one_piece_mesh_keeps_its_weights():
     dense = np.array([[0.9, 0.1], [0.8, 0.2], [0.7, 0.3], [0.9, 0.1]])
-    out = bind_rigid_parts(TETRA, TETRA_FACES, sp.csr_matrix(dense))
+    out = bind_rigid_parts(TETRA, part_labels(TETRA, TETRA_FACES), sp.csr_matrix(dense))
     assert np.allclose(out.toarray(), dense)
 
 
@@ -45,7 +45,7 @@ def test_a_part_as_large_as_the_body_keeps_its_blend():
     """Two equal parts, each half the mesh's extent: bodies, not pieces, so a 67.5 % share does not bind them."""
     v, f = _two_parts()
     dense = np.tile([[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]], (2, 1))
-    out = bind_rigid_parts(v, f, sp.csr_matrix(dense), max_size=0.35).toarray()
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), max_size=0.35).toarray()
     assert np.allclose(out, dense)
-    small = bind_rigid_parts(v, f, sp.csr_matrix(dense), max_size=0.8).toarray()
+    small = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), max_size=0.8).toarray()
     assert np.array_equal(small[:4], np.tile([1.0, 0.0, 0.0], (4, 1)))
