@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
+from simcore.geometry.similarity import similarity_fit
 from simcore.io.gltf_document import GltfDocument
 from simcore.skeleton.types import Skeleton, parents_first_order
 
@@ -175,23 +176,18 @@ def _merge_skins(doc: GltfDocument, skins: list[int], binds: dict[int, tuple[np.
 
 def _similarity(source: np.ndarray, target: np.ndarray) -> np.ndarray | None:
     """(4, 4) rotation, uniform scale and translation that best maps points `source` onto `target` (least
-    squares, Umeyama); None for fewer than 4 points or a degenerate spread."""
+    squares, `similarity_fit`); None for fewer than 4 points or a degenerate spread."""
     if len(source) < 4:
         return None
-    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
-    a, b = source - mu_s, target - mu_t
-    var = float((a * a).sum()) / len(a)
+    var = float(((source - source.mean(axis=0)) ** 2).sum()) / len(source)
     if not np.isfinite(var) or var <= 1e-18:
         return None
-    u, d, vt = np.linalg.svd(b.T @ a / len(a))
-    sign = np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt)) or 1.0])
-    rot = u @ sign @ vt
-    scale = float(np.trace(np.diag(d) @ sign)) / var
+    scale, rot, shift = similarity_fit(source, target)
     if not np.isfinite(scale) or scale <= 0:
         return None
     out = np.eye(4)
     out[:3, :3] = scale * rot
-    out[:3, 3] = mu_t - scale * rot @ mu_s
+    out[:3, 3] = shift
     return out
 
 

@@ -60,7 +60,8 @@ def load_uploaded_clip(path: Path, fmt: str | None, state: PipelineState) -> Mot
 
 def clip_from_mesh_upload(state: PipelineState) -> MotionClip:
     """The clip `options.motion.clip` names inside the mesh upload, moved into the ingested mesh's frame."""
-    from simcore.motion.clip_frame import similarity_fit, transform_clip
+    from simcore.geometry.similarity import similarity_fit
+    from simcore.motion.clip_frame import transform_clip
     from simcore.motion.gltf_clips import read_gltf_clip
 
     mesh = state.mesh
