@@ -13,7 +13,7 @@ from pydantic import ValidationError
 from api.auth import CurrentKey
 from api.db import session_scope
 from api.errors import Problem
-from api.http_cache import conditional
+from api.http_cache import GZIP_MIN_BYTES, conditional
 from api.jobs import lifecycle, service, state
 from api.jobs.artifact_responses import artifact_response, find_artifact, zip_response
 from api.jobs.events import job_stream
@@ -147,7 +147,8 @@ async def get_job(request: Request, job_id: uuid.UUID, key: CurrentKey,
                                                               "304 when the job has not changed")] = None) -> Response:
     view = await owned_view(job_id, key, base_url(request))  # no database read while the job is unchanged (api.jobs.views)
     accept = request.headers.get("accept-encoding") or ""
-    return conditional(view.body, view.etag, if_none_match, accept, view.body_gzip if "gzip" in accept else None)
+    zipped = view.body_gzip if "gzip" in accept and len(view.body) >= GZIP_MIN_BYTES else None  # small: never sent gzipped
+    return conditional(view.body, view.etag, if_none_match, accept, zipped)
 
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job",

@@ -187,8 +187,8 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
     lost: list[uuid.UUID] = []
     expired = session.execute(select(Job.id, Job.attempts).where(Job.status == "running", Job.lease_expires_at < t)).all()
     for job_id, attempts in expired:
-        done = attempts >= max_attempts
         values = _lost_values(attempts, max_attempts, t)
+        done = values["status"] == "failed"
         result = session.execute(
             update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, Job.lease_expires_at < t)
             .values(**values).execution_options(synchronize_session=False)
@@ -197,12 +197,13 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
             (lost if done else requeue).append(job_id)
             if done:
                 outbox.record(session, job_id, "job.failed")
+    moved = list(requeue)
     stale = t - timedelta(seconds=requeue_after_seconds)
     for (job_id,) in session.execute(select(Job.id).where(Job.status == "queued", Job.enqueued_at < stale)).all():
         session.execute(update(Job).where(Job.id == job_id, Job.status == "queued").values(enqueued_at=t)
                         .execution_options(synchronize_session=False))
         requeue.append(job_id)
     session.commit()
-    for job_id in (*requeue, *lost):
+    for job_id in (*moved, *lost):  # a job only re-sent changed nothing a client sees
         changes.publish("job", job_id)
     return requeue, lost

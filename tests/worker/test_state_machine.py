@@ -107,3 +107,19 @@ def test_a_dead_pool_process_gives_its_job_back_at_once(job_id):
         assert state.release_lost(s, job_id, "host:102", max_attempts=2) == "failed"
     job = get(job_id)
     assert job.status == "failed" and job.error_code == "worker_lost"
+
+
+def test_reconcile_announces_only_jobs_whose_state_changed(job_id, monkeypatch):
+    published: list[str] = []
+    monkeypatch.setattr(state.changes, "publish", lambda kind, ident: published.append(str(ident)))
+    with session_scope() as s:
+        s.get_one(Job, job_id).enqueued_at = state.now() - timedelta(seconds=120)
+        s.commit()
+        assert state.reconcile(s, max_attempts=3, requeue_after_seconds=60) == ([job_id], [])
+        assert published == []  # only re-sent: what a client sees is unchanged
+        claim = state.claim(s, job_id, "w", 60)
+        assert claim is not None and published == [str(job_id)]
+        s.get_one(Job, job_id).lease_expires_at = state.now() - timedelta(seconds=1)
+        s.commit()
+        assert state.reconcile(s, max_attempts=3, requeue_after_seconds=60) == ([job_id], [])
+        assert published == [str(job_id)] * 2  # lease lost: running -> queued is announced
