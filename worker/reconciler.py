@@ -1,8 +1,8 @@
 """Recovery of lost jobs, two ways (claims are compare-and-set, so any number of copies is safe):
 
 - a pool process that dies mid-job (SIGKILL, the OOM killer) is noticed at once by its worker's main process,
-  which re-queues the job it was running and sends it again (`LostJobRequest`): the retry starts within a second
-  or two when a worker slot is free;
+  which re-queues the job it was running and sends it again (`LostJobRequest`): the retry starts as soon as a
+  worker slot is free (bench/kill_retry.py measures both ways);
 - a whole worker that dies (host lost, main process killed) stops renewing its jobs' leases: the reconciler thread
   of every other worker re-queues a running job once its lease has expired. A job is retried at most
   `lease_seconds` + `reconcile_seconds` after the kill (15 + 2 s by default; heartbeats every 3 s).
