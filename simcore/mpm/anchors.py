@@ -10,21 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-MIN_WEIGHT = 1e-6  # a joint whose weights sum below this keeps the identity rotation (translation: none)
-
-
-def kabsch(rest: np.ndarray, moved: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotation R (3, 3) and translation t (3,) minimising Σ w_i |R rest_i + t − moved_i|²; w (V,) ≥ 0."""
-    total = float(w.sum())
-    if total < MIN_WEIGHT:
-        return np.eye(3), np.zeros(3)
-    a = (w[:, None] * rest).sum(0) / total
-    b = (w[:, None] * moved).sum(0) / total
-    h = ((rest - a) * w[:, None]).T @ (moved - b)
-    u, _, vt = np.linalg.svd(h)
-    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    r = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
-    return r, b - r @ a
+from simcore.geometry.similarity import rigid_fit
 
 
 def joint_motions(targets: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -37,7 +23,7 @@ def joint_motions(targets: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray,
     trans = np.zeros((t_count, m_count, 3))
     for t in range(1, t_count):
         for m in range(m_count):
-            rot[t, m], trans[t, m] = kabsch(targets[0], targets[t], weights[:, m])
+            rot[t, m], trans[t, m] = rigid_fit(targets[0], targets[t], weights[:, m])
     return rot, trans
 
 
