@@ -47,7 +47,7 @@ def _inside(path: str, what: str) -> str:
     return normal
 
 
-class _Archive:
+class ZipArchive:
     """The archive's files by normalised name, read on demand within the caps."""
 
     def __init__(self, data: bytes) -> None:
@@ -88,7 +88,7 @@ def _data_uri(uri: str) -> bytes:
         raise _fail(f"data: URI is not valid base64: {exc}", "invalid_gltf") from exc
 
 
-def _the_model(archive: _Archive) -> str:
+def _the_model(archive: ZipArchive) -> str:
     models = sorted(n for n in archive.files if n.lower().endswith((".gltf", ".glb")))
     if len(models) != 1:
         found = ", ".join(models[:5]) or "none"
@@ -100,7 +100,7 @@ def _the_model(archive: _Archive) -> str:
 def glb_from_zip(data: bytes) -> bytes:
     """GLB bytes of the one .gltf in the .zip `data` with its buffers and the images the archive holds packed
     into the BIN chunk (a .glb in the archive is returned as it is). Raises InvalidInput / LimitExceeded."""
-    archive = _Archive(data)
+    archive = ZipArchive(data)
     model = _the_model(archive)
     if model.lower().endswith(".glb"):
         return archive.read(model)

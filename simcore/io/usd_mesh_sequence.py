@@ -146,10 +146,3 @@ def read_usd_sequence(data: bytes, suffix: str, *, fps: float | None, check_fram
     frames *= metres
     name = meshes[0].GetPrim().GetName()
     return MeshSequence(frames, faces.astype(np.int64), float(rate), name)
-
-
-def obj_bytes(vertices: np.ndarray, faces: np.ndarray) -> bytes:
-    """A plain OBJ of one triangle mesh (vertex order kept, full float precision)."""
-    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in np.asarray(vertices, np.float64).tolist()]
-    lines += [f"f {a} {b} {c}" for a, b, c in (np.asarray(faces, np.int64) + 1).tolist()]
-    return ("\n".join(lines) + "\n").encode()

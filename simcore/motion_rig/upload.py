@@ -49,9 +49,9 @@ def _natural_key(name: str) -> list:
 
 def _frame_files(data: bytes) -> list[tuple[str, bytes, str]] | None:
     """(name, bytes, format) of a .zip holding per-frame OBJ or PLY files only, in natural name order."""
-    from simcore.io.gltf_zip import _Archive
+    from simcore.io.gltf_zip import ZipArchive
 
-    archive = _Archive(data)
+    archive = ZipArchive(data)
     names = [n for n in archive.files if not n.lower().endswith(".mtl") and "__MACOSX" not in n]
     kinds = {FRAME_SUFFIXES.get(n[n.rfind("."):].lower()) for n in names}
     if not names or None in kinds or len(kinds) != 1:
@@ -63,9 +63,9 @@ def _frame_files(data: bytes) -> list[tuple[str, bytes, str]] | None:
 
 def _is_usdz(data: bytes) -> bool:
     """A .zip whose first member is a USD layer (a .usdz package)."""
-    from simcore.io.gltf_zip import _Archive
+    from simcore.io.gltf_zip import ZipArchive
 
-    names = list(_Archive(data).files)
+    names = list(ZipArchive(data).files)
     return bool(names) and names[0].lower().endswith(USD_SUFFIXES)
 
 
@@ -77,14 +77,19 @@ def is_sequence_archive(data: bytes) -> bool:
 
 def _usd_upload(data: bytes, suffix: str, fps: float | None) -> SequenceUpload:
     """A USD sequence; its first frame, as OBJ (+Y up, metres), is the bind mesh."""
-    from simcore.io.usd_mesh_sequence import obj_bytes, read_usd_sequence
+    import trimesh
+    from trimesh.exchange.obj import export_obj
+
+    from simcore.io.usd_mesh_sequence import read_usd_sequence
 
     sequence = read_usd_sequence(data, suffix, fps=fps, check_frames=check_frame_count, check_samples=check_samples)
     if sequence is None:
         raise InvalidInput("a USD upload must be a mesh sequence: no mesh of this file has time-sampled points "
                            "(a skeletal USD animation is not read; export its meshes' points per frame)",
                            code="no_mesh_sequence", field="mesh")
-    return SequenceUpload(obj_bytes(sequence.frames[0], sequence.faces), "obj", sequence)
+    first = trimesh.Trimesh(sequence.frames[0], sequence.faces, process=False)
+    obj = export_obj(first, include_normals=False, include_color=False, include_texture=False, digits=9, header=None)
+    return SequenceUpload(obj.encode(), "obj", sequence)
 
 
 def _frames_from_files(files: list[tuple[str, bytes, str]], fps: float) -> MeshSequence:
