@@ -11,7 +11,6 @@
 from __future__ import annotations
 
 import logging
-import socket
 import threading
 import uuid
 from typing import Any
@@ -46,7 +45,7 @@ def release_dead_attempt(job_id: str, pid: int, settings: Settings) -> str | Non
     from worker.celery_app import enqueue
 
     with session_scope() as session:
-        status = state.release_lost(session, uuid.UUID(job_id), f"{socket.gethostname()}:{pid}", settings.jobs.max_attempts)
+        status = state.release_lost(session, uuid.UUID(job_id), state.worker_id(pid), settings.jobs.max_attempts)
     if status == "queued":
         enqueue(job_id)
     if status is not None:

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import os
-import socket
 import uuid
 
 from celery.signals import celeryd_after_setup, setup_logging, worker_process_init, worker_ready, worker_shutdown
 
+from api.jobs.state import worker_id
 from api.log_format import configure, job_context
 from api.settings import get_settings
 from worker.celery_app import TASK_NAME, make_celery
@@ -26,7 +26,7 @@ _inherited_pools: list[object] = []  # in a pool process: the main process's con
 def run_job(job_id: str) -> str:
     """Run job `job_id` if this delivery wins the claim."""
     with job_context(job_id):
-        return execute(uuid.UUID(job_id), get_settings(), f"{socket.gethostname()}:{os.getpid()}")
+        return execute(uuid.UUID(job_id), get_settings(), worker_id())
 
 
 @setup_logging.connect
@@ -70,7 +70,7 @@ def _start_reconciler(sender: object = None, **_: object) -> None:
     _reconciler = Reconciler(get_settings())
     _reconciler.start()
     concurrency = int(getattr(getattr(sender, "controller", None), "concurrency", 1) or 1)
-    _maintenance = Maintenance(get_settings(), f"{socket.gethostname()}:{os.getpid()}", concurrency)
+    _maintenance = Maintenance(get_settings(), worker_id(), concurrency)
     _maintenance.start()
 
 

@@ -8,11 +8,13 @@ process running it died).
 
 from __future__ import annotations
 
+import os
+import socket
 import uuid
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
-from sqlalchemy import select, update
+from sqlalchemy import ColumnElement, select, update
 from sqlalchemy.orm import Session
 
 from api import changes
@@ -154,26 +156,37 @@ def _lost_values(attempts: int, max_attempts: int, t: datetime) -> dict:
     return dict(status="queued", stage="requeued", lease_expires_at=None, worker_id=None, enqueued_at=t)
 
 
+def worker_id(pid: int | None = None) -> str:
+    """The id a claim records for process `pid` (default this one) on this host: `host:pid`."""
+    return f"{socket.gethostname()}:{os.getpid() if pid is None else pid}"
+
+
+def _release(session: Session, job_id: uuid.UUID, attempts: int, max_attempts: int, t: datetime, *guards: ColumnElement[bool]) -> str | None:
+    """Compare-and-set a lost attempt (`attempts`, still running, and `guards`) to queued, or to failed past max_attempts
+    with its webhook event; uncommitted. Returns the new status, or None when the job is no longer that attempt."""
+    values = _lost_values(attempts, max_attempts, t)
+    result = session.execute(
+        update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, *guards)
+        .values(**values).execution_options(synchronize_session=False)
+    )
+    if rowcount(result) != 1:
+        return None
+    if values["status"] == "failed":
+        outbox.record(session, job_id, "job.failed")
+    return str(values["status"])
+
+
 def release_lost(session: Session, job_id: uuid.UUID, worker_id: str, max_attempts: int) -> str | None:
     """The process `worker_id` died running the job: re-queue it now, without waiting for its lease (or fail it past
     max_attempts). Returns the new status, or None when that process no longer held the job."""
     job = session.get(Job, job_id)
-    if job is None:
-        return None
-    t, attempts = now(), job.attempts
-    values = _lost_values(attempts, max_attempts, t)
-    result = session.execute(
-        update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, Job.worker_id == worker_id)
-        .values(**values).execution_options(synchronize_session=False)
-    )
-    if rowcount(result) != 1:
+    status = None if job is None else _release(session, job_id, job.attempts, max_attempts, now(), Job.worker_id == worker_id)
+    if status is None:
         session.rollback()
         return None
-    if values["status"] == "failed":
-        outbox.record(session, job_id, "job.failed")
     session.commit()
     changes.publish("job", job_id)
-    return str(values["status"])
+    return status
 
 
 def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float) -> tuple[list[uuid.UUID], list[uuid.UUID]]:
@@ -187,16 +200,9 @@ def reconcile(session: Session, max_attempts: int, requeue_after_seconds: float)
     lost: list[uuid.UUID] = []
     expired = session.execute(select(Job.id, Job.attempts).where(Job.status == "running", Job.lease_expires_at < t)).all()
     for job_id, attempts in expired:
-        values = _lost_values(attempts, max_attempts, t)
-        done = values["status"] == "failed"
-        result = session.execute(
-            update(Job).where(Job.id == job_id, Job.status == "running", Job.attempts == attempts, Job.lease_expires_at < t)
-            .values(**values).execution_options(synchronize_session=False)
-        )
-        if rowcount(result) == 1:
-            (lost if done else requeue).append(job_id)
-            if done:
-                outbox.record(session, job_id, "job.failed")
+        status = _release(session, job_id, attempts, max_attempts, t, Job.lease_expires_at < t)
+        if status is not None:
+            (lost if status == "failed" else requeue).append(job_id)
     moved = list(requeue)
     stale = t - timedelta(seconds=requeue_after_seconds)
     for (job_id,) in session.execute(select(Job.id).where(Job.status == "queued", Job.enqueued_at < stale)).all():
