@@ -43,6 +43,8 @@ def render(report: dict, console: Console) -> None:
             note += f", joints 0.5-2x {mean['joint_ratio_ok']:.0%}"
         if "beats_voxel" in mean:
             note += f", beats voxel {mean['beats_voxel']:.0%}"
+        if "j2j_matched" in mean:
+            note += f", J2J without extra joints {mean['j2j_matched']:.4f}"
         table.add_row("MEAN", "", method, *_metric_cells(mean), _fmt(mean.get("seconds"), 2), note, style="bold")
     console.print(table)
     cats = Table("category", "method", "assets", "J2J", "J2B", "B2B", "joints pred/gt", "inside", title="Per-category means")

@@ -44,7 +44,7 @@ METHODS = ("all", "voxel", *PREDICTED_METHODS)
 __all__ = ["AssetResult", "EvalCase", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "load_case",
            "read_categories", "resolve_methods"]
 JOINT_RATIO = (0.5, 2.0)  # a predicted joint count within this factor of the artist's is plausible
-METRIC_KEYS = ("j2j", "j2b", "b2b", "joints_pred", "joints_gt", "joint_ratio", "inside", "seconds")
+METRIC_KEYS = ("j2j", "j2b", "b2b", "joints_pred", "joints_gt", "joint_ratio", "inside", "seconds", "j2j_matched")
 
 
 @dataclass
@@ -83,7 +83,8 @@ class SkeletonEvaluation:
         return list(dict.fromkeys(r.method for r in self.results))
 
     def mean(self, method: str, category: str | None = None) -> dict:
-        """Mean of every metric over the successful rows of `method` (optionally one category), the share of them
+        """Mean of every metric (that all of them have) over the successful rows of `method` (optionally one
+        category), the share of them
         whose joint count is within JOINT_RATIO of the artist's, and the share with a lower J2J than the voxel
         baseline on the same asset (when it ran)."""
         rows = [r.to_dict() for r in self.results
@@ -94,7 +95,8 @@ class SkeletonEvaluation:
         if not rows:
             return out
         for key in METRIC_KEYS:
-            out[key] = round(float(np.mean([row[key] for row in rows])), 6)
+            if all(row.get(key) is not None for row in rows):
+                out[key] = round(float(np.mean([row[key] for row in rows])), 6)
         lo, hi = JOINT_RATIO
         out["joint_ratio_ok"] = round(float(np.mean([lo <= row["joint_ratio"] <= hi for row in rows])), 4)
         voxel = {r.name: r.scores.j2j for r in self.results if r.method == "voxel" and r.scores is not None}

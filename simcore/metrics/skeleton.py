@@ -8,6 +8,9 @@ nearest-neighbour distances:
   J2J: predicted joints ↔ ground-truth joints;
   J2B: predicted joints → ground-truth bone points and ground-truth joints → predicted bone points;
   B2B: predicted bone points ↔ ground-truth bone points.
+J2J splits into extra and misplaced joints: `j2j_matched` is J2J over the predicted joints that are some
+ground-truth joint's nearest one only (the others are extra: no artist joint is closest to them); j2j − j2j_matched
+is what the extra joints cost, and j2j_matched what joint placement and missing joints cost.
 Ground truth = the skin joints that influence a vertex or have a descendant that does, at bind pose.
 """
 
@@ -38,6 +41,7 @@ class SkeletonScores:
     joints_pred: int
     joints_gt: int
     inside: float
+    j2j_matched: float | None = None
 
     @property
     def joint_ratio(self) -> float:
@@ -47,8 +51,9 @@ class SkeletonScores:
     def to_dict(self) -> dict:
         """JSON-ready values (distances rounded to 1e-6), joint_ratio included."""
         out = asdict(self)
-        for key in ("j2j", "j2b", "b2b", "inside"):
-            out[key] = round(float(out[key]), 6)
+        for key in ("j2j", "j2b", "b2b", "inside", "j2j_matched"):
+            if out[key] is not None:
+                out[key] = round(float(out[key]), 6)
         out["joint_ratio"] = round(self.joint_ratio, 4)
         return out
 
@@ -112,6 +117,7 @@ def graph_scores(pred_joints: np.ndarray, pred_edges: np.ndarray, gt: Skeleton, 
     pb, gb = bone_points(pj, pred_edges), bone_points(gj, gt.bones())
     if grid is None:
         grid = solid_voxels(vertices, faces, resolution=INSIDE_RESOLUTION)
+    matched = np.unique(cKDTree(pj).query(gj)[1])  # each ground-truth joint's nearest predicted joint
     return SkeletonScores(
         j2j=chamfer(pj, gj),
         j2b=0.5 * (_mean_nearest(pj, gb) + _mean_nearest(gj, pb)),
@@ -119,6 +125,7 @@ def graph_scores(pred_joints: np.ndarray, pred_edges: np.ndarray, gt: Skeleton, 
         joints_pred=len(pred_joints),
         joints_gt=gt.num_joints,
         inside=float(grid.inside(pred_joints).mean()),
+        j2j_matched=0.5 * (_mean_nearest(pj[matched], gj) + _mean_nearest(gj, pj)),
     )
 
 

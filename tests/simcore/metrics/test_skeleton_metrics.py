@@ -47,6 +47,15 @@ def test_extra_joint_on_the_bone_costs_j2j_but_not_b2b(box) -> None:
     # pred→gt: (0 + 0.25 + 0) / 3, gt→pred: 0; halved.
     assert s.j2j == pytest.approx(0.25 / 3 / 2)
     assert s.j2b == pytest.approx(0.0, abs=1e-12) and s.b2b == pytest.approx(0.0, abs=1e-12)
+    assert s.j2j_matched == pytest.approx(0.0, abs=1e-12)  # the middle joint is extra: all of J2J is its cost
+
+
+def test_j2j_matched_keeps_the_misplacement_of_the_matched_joints(box) -> None:
+    gt = line([[-0.5, 0, 0], [0.5, 0, 0]])
+    pred = line([[-0.5, 0.2, 0], [0.5, 0.2, 0], [0.5, 0.4, 0]])  # both ends 0.1 units off, one extra 0.2 off
+    s = skeleton_scores(pred, gt, box.vertices, box.faces)
+    assert s.j2j == pytest.approx(0.5 * ((0.1 + 0.1 + 0.2) / 3 + 0.1))
+    assert s.j2j_matched == pytest.approx(0.1)
 
 
 def test_inside_share_uses_the_solid_mesh(box) -> None:
