@@ -26,6 +26,8 @@ class JobSettings(BaseModel):
     worker_stall_seconds: float = Field(60.0, gt=0, description="serve restarts its embedded worker when a job waits queued this "
                                         "long with none running")
     worker_check_seconds: float = Field(5.0, gt=0, description="how often serve checks its embedded worker")
+    worker_nice: int = Field(10, ge=0, le=19, description="CPU priority (nice) of serve's embedded worker below the API: on one "
+                             "machine requests are answered first and jobs take the CPU time left")
 
 
 class WebhookSettings(BaseModel):

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import threading
 import time
+from functools import partial
 from pathlib import Path
 
 from sqlalchemy import func, select
@@ -35,11 +36,13 @@ def active() -> EmbeddedWorker | None:
     return _active
 
 
-def _die_with_parent() -> None:
-    """In the child: get SIGTERM when the parent dies (a SIGKILLed `serve` runs no cleanup)."""
+def _child_setup(nice: int) -> None:
+    """In the child: get SIGTERM when the parent dies (a SIGKILLed `serve` runs no cleanup), and yield the CPU to the
+    API by `nice` (its pool processes inherit it)."""
     import ctypes
 
     ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # 1 = PR_SET_PDEATHSIG
+    os.nice(nice)
 
 
 def kill_group(proc: subprocess.Popen, grace: float) -> None:
@@ -92,7 +95,7 @@ class EmbeddedWorker(threading.Thread):
         self._lock = threading.Lock()
 
     def _spawn(self) -> None:
-        self.proc = subprocess.Popen(self.command, start_new_session=True, preexec_fn=_die_with_parent)
+        self.proc = subprocess.Popen(self.command, start_new_session=True, preexec_fn=partial(_child_setup, self.settings.jobs.worker_nice))
         self.started_at, self.starved_since = time.monotonic(), None
 
     def _restart(self, reason: str) -> None:

@@ -155,3 +155,20 @@ def test_serve_restarts_a_dead_worker_reports_it_and_leaves_no_orphan_after_sigt
     proc.send_signal(signal.SIGTERM)
     proc.wait(30)
     wait_for(lambda: not group(new_worker[0]), 20)
+
+
+def test_the_embedded_worker_yields_the_cpu_to_the_api(tmp_path):
+    """It runs `worker_nice` below serve (its pool processes inherit that), so requests are answered first."""
+    from api.settings import get_settings
+    from worker.embedded import EmbeddedWorker
+
+    seen = tmp_path / "nice"
+    report = f"import os, pathlib, time; pathlib.Path({str(seen)!r}).write_text(str(os.nice(0))); time.sleep(60)"
+    with service_env(tmp_path / "data", jobs__worker_nice="7"):
+        worker = EmbeddedWorker(get_settings(), [sys.executable, "-c", report])
+        worker.start()
+        try:
+            wait_for(lambda: seen.exists() and seen.read_text(), 30, 0.1)
+        finally:
+            worker.stop(grace=1)
+    assert int(seen.read_text()) == min(19, os.nice(0) + 7)
