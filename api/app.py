@@ -10,6 +10,7 @@ from fastapi.middleware.gzip import GZipMiddleware
 from fastapi.staticfiles import StaticFiles
 
 from api import access_log, docs_pages, errors, health
+from api.http_cache import GZIP_MIN_BYTES
 from api.jobs.router import router as jobs_router
 from api.jobs.signed_router import router as files_router
 from api.keys.router import router as keys_router
@@ -51,7 +52,7 @@ def create_app() -> FastAPI:
     app.include_router(keys_router)
     app.include_router(webhook_router)
     app.include_router(metrics_router)
-    app.add_middleware(GZipMiddleware, minimum_size=1024)  # the viewer bundle is ~660 KB raw, ~170 KB gzipped; SSE is excluded
+    app.add_middleware(GZipMiddleware, minimum_size=GZIP_MIN_BYTES)  # the viewer bundle is ~660 KB raw, ~170 KB gzipped; SSE is excluded
     app.add_middleware(UploadLimit, max_bytes=2 * settings.max_upload_bytes + BODY_SLACK_BYTES)
     app.add_middleware(SecurityHeaders)  # outermost: also on 413s from UploadLimit
     dist = WEB_DIR / "dist"

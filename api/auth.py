@@ -1,4 +1,5 @@
-"""Bearer-key authentication as a FastAPI dependency, with verified keys cached in this process.
+"""Bearer-key authentication and the per-key rate limit as one FastAPI dependency, with verified keys cached in
+this process.
 
 A key is looked up by the SHA-256 of its secret. A verified key is kept for `auth_cache_seconds` (only keys that
 exist and are active: an unknown secret is looked up every time, so a new key works at once). Revoking a key
@@ -15,7 +16,7 @@ from fastapi import Depends, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
-from api import changes
+from api import changes, ratelimit
 from api.db import session_scope
 from api.errors import Problem
 from api.keys.service import find_active_by_hash, hash_key
@@ -56,8 +57,10 @@ async def verified_key(secret: str) -> ApiKey | None:
 
 
 async def current_key(request: Request, credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)]) -> ApiKey:
-    """The active key named by `Authorization: Bearer <key>`. Keys in URLs are refused: URLs end up in access logs,
-    browser history and shared links (downloads have signed links, events are read with the header)."""
+    """The active key named by `Authorization: Bearer <key>`, its request counted against its rate limit (429 past it).
+    Keys in URLs are refused: URLs end up in access logs, browser history and shared links (downloads have signed links,
+    events are read with the header). Every /api/v1 route but signed downloads takes it, once per request: one
+    dependency, where a separate rate-limit dependency on the same key would make FastAPI solve the key's twice."""
     if "key" in request.query_params:
         raise Problem(401, "key_in_url", "send the API key in the 'Authorization: Bearer <key>' header, never in the URL; "
                       "to download without a key use the job's download_url", field="key", headers={"WWW-Authenticate": "Bearer"})
@@ -67,6 +70,7 @@ async def current_key(request: Request, credentials: Annotated[HTTPAuthorization
     key = await verified_key(secret.strip())
     if key is None:
         raise Problem(401, "unauthorized", "the API key is unknown or revoked", headers={"WWW-Authenticate": "Bearer"})
+    await ratelimit.count(key)
     return key
 
 

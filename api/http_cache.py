@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gzip
 import hashlib
+from collections.abc import Callable
 from typing import Any
 
 from fastapi import Response
@@ -25,7 +26,7 @@ def entity_tag(model: BaseModel, exclude: Any = None) -> tuple[bytes, str]:
     return body, ("W/" if exclude else "") + '"' + hashlib.sha256(tagged).hexdigest()[:32] + '"'
 
 
-GZIP_MIN_BYTES = 1024  # as the app's GZipMiddleware
+GZIP_MIN_BYTES = 1024  # smaller answers are sent as they are (the app's GZipMiddleware threshold too)
 
 
 def gzipped(body: bytes) -> bytes:
@@ -34,14 +35,15 @@ def gzipped(body: bytes) -> bytes:
 
 
 def conditional(body: bytes, etag: str, if_none_match: str | None, accept_encoding: str | None = None,
-                body_gzip: bytes | None = None) -> Response:
-    """`body` (JSON) with its ETag, or an empty 304 when `if_none_match` names it; `body_gzip` (its gzip form) is
-    sent as it is to clients that accept gzip (GZipMiddleware leaves an answer that has a Content-Encoding alone)."""
+                body_gzip: Callable[[], bytes] | None = None) -> Response:
+    """`body` (JSON) with its ETag, or an empty 304 when `if_none_match` names it; `body_gzip()` (its gzip form, asked for
+    only when sent) goes as it is to clients that accept gzip (GZipMiddleware leaves an answer that has a Content-Encoding
+    alone)."""
     headers = {"ETag": etag, "Cache-Control": "no-cache"}  # no-cache: revalidate every time, which the 304 makes cheap
     if if_none_match is not None and ({"*", etag.removeprefix("W/")} & _tags(if_none_match)):
         return Response(status_code=304, headers=headers)
     if body_gzip is not None and "gzip" in (accept_encoding or "") and len(body) >= GZIP_MIN_BYTES:
-        return Response(body_gzip, media_type="application/json", headers={**headers, "Content-Encoding": "gzip",
+        return Response(body_gzip(), media_type="application/json", headers={**headers, "Content-Encoding": "gzip",
                                                                            "Vary": "Accept-Encoding"})
     return Response(body, media_type="application/json", headers=headers)
 

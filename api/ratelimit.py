@@ -17,9 +17,9 @@ from limits import RateLimitItem, parse_many
 from limits.storage import storage_from_string
 from limits.strategies import MovingWindowRateLimiter
 
-from api.auth import CurrentKey
 from api.errors import Problem
 from api.metrics import RATE_LIMITED
+from api.models import ApiKey
 from api.settings import Settings, get_settings
 
 log = logging.getLogger("rigforge.ratelimit")
@@ -56,9 +56,9 @@ def check(identity: str, settings: Settings) -> None:
                   headers={"Retry-After": str(max(1, math.ceil(reset - time.time())))})
 
 
-async def rate_limited(key: CurrentKey) -> None:
-    """Router dependency: the signed-in key's request counts against its rate limit (in this process's memory on the
-    event loop; in Redis from a worker thread)."""
+async def count(key: ApiKey) -> None:
+    """Count one request of the signed-in `key` against its rate limit (in this process's memory on the event loop; in
+    Redis from a worker thread)."""
     settings = get_settings()
     if not settings.rate_limit.strip():
         return

@@ -13,7 +13,7 @@ from pydantic import ValidationError
 from api.auth import CurrentKey
 from api.db import session_scope
 from api.errors import Problem
-from api.http_cache import GZIP_MIN_BYTES, conditional
+from api.http_cache import conditional
 from api.jobs import lifecycle, service, state
 from api.jobs.artifact_responses import artifact_response, find_artifact, zip_response
 from api.jobs.events import job_stream
@@ -25,14 +25,13 @@ from api.openapi import BINARY, json_part, json_part_encoding
 from api.problem_schema import problem_responses
 from api.queue import enqueue_job
 from api.quotas import check_submit
-from api.ratelimit import rate_limited
 from api.settings import get_settings
 from api.storage import get_storage
 from api.webhooks.urls import checked_callback_url
 from simcore.io.json_bounds import JsonTooDeep, loads_bounded
 from simcore.options import JobOptions
 
-router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], dependencies=[Depends(rate_limited)],
+router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"],
                    responses=problem_responses(401, 429))
 MAX_OPTIONS_DEPTH = 8  # JobOptions nests 3 deep (refine.bone_stiffness)
 OPTIONS_EXAMPLE = {"skeleton": "auto", "skinning": "auto", "motion": {"in_place": True}, "fbx": True}
@@ -146,9 +145,7 @@ async def get_job(request: Request, job_id: uuid.UUID, key: CurrentKey,
                   if_none_match: Annotated[str | None, Header(alias="If-None-Match", description="an ETag from an earlier answer: "
                                                               "304 when the job has not changed")] = None) -> Response:
     view = await owned_view(job_id, key, base_url(request))  # no database read while the job is unchanged (api.jobs.views)
-    accept = request.headers.get("accept-encoding") or ""
-    zipped = view.body_gzip if "gzip" in accept and len(view.body) >= GZIP_MIN_BYTES else None  # small: never sent gzipped
-    return conditional(view.body, view.etag, if_none_match, accept, zipped)
+    return conditional(view.body, view.etag, if_none_match, request.headers.get("accept-encoding"), lambda: view.body_gzip)
 
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=JobOut, summary="Cancel a queued or running job",

@@ -19,9 +19,8 @@ from api.errors import Problem
 from api.keys import service
 from api.models import ApiKey
 from api.problem_schema import problem_responses
-from api.ratelimit import rate_limited
 
-router = APIRouter(prefix="/api/v1/keys", tags=["keys"], dependencies=[Depends(rate_limited)],
+router = APIRouter(prefix="/api/v1/keys", tags=["keys"],
                    responses=problem_responses(401, 429))
 
 

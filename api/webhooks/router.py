@@ -8,18 +8,17 @@ from __future__ import annotations
 
 import uuid
 
-from fastapi import APIRouter, Depends
+from fastapi import APIRouter
 from pydantic import BaseModel, Field
 
 from api.auth import CurrentKey
 from api.db import session_scope
 from api.models import ApiKey
 from api.problem_schema import problem_responses
-from api.ratelimit import rate_limited
 from api.webhooks.signing import new_secret
 from api.webhooks.urls import checked_callback_url
 
-router = APIRouter(prefix="/api/v1/keys/me/webhook", tags=["keys"], dependencies=[Depends(rate_limited)],
+router = APIRouter(prefix="/api/v1/keys/me/webhook", tags=["keys"],
                    responses=problem_responses(401, 429))
 
 
