@@ -1,4 +1,4 @@
-"""`rigforge eval motion DIR [--artist-only] [--only NAME ...] [--json FILE]`: clip retargeting quality.
+"""`rigforge eval motion DIR [--artist-only] [--only NAME ...] [--split SPLIT] [--json FILE]`: clip retargeting quality.
 
 Registered in cli/main.py as `eval_app.command("motion")(eval_motion.eval_motion)`.
 """
@@ -65,13 +65,14 @@ def eval_motion(
     artist_only: Annotated[bool, typer.Option(help="only the self-check onto the artist skeleton")] = False,
     only: Annotated[list[str] | None, typer.Option(help="evaluate only these asset names")] = None,
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
+    split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
 ) -> None:
     """Retarget each character's own clip onto our predicted rig and compare with the artist's animation."""
     from simcore.evaluation.motion_eval import evaluate_motion
 
     console = Console()
     with console.status("retargeting…") as status:
-        report = evaluate_motion(directory, use_predicted=not artist_only, only=set(only) if only else None,
+        report = evaluate_motion(directory, use_predicted=not artist_only, only=set(only) if only else None, split=split,
                                  on_asset=lambda n: status.update(f"retargeting {n}"))
     render(report, console)
     write_report_json(console, json_path, report.to_dict())

@@ -238,9 +238,10 @@ def evaluate_character(name: str, category: str, doc: GltfDocument, asset: Rigge
     return rows
 
 
-def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[str] | None = None,
+def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[str] | None = None, split: str | None = None,
                     on_asset: Callable[[str], None] = lambda name: None) -> MotionEvaluation:
-    """Evaluate every animated rig in `directory` (see the module docstring)."""
+    """Evaluate every animated rig in `directory` (see the module docstring); with `split`, only the files
+    DIR/MANIFEST.tsv lists for that split (the training corpus layout)."""
     directory = Path(directory)
     report = MotionEvaluation()
     predictors = _load_predictors() if use_predicted else None
@@ -248,7 +249,7 @@ def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[st
         report.predictor = "unavailable (simcore.skeleton.predict / simcore.skinning.predict not importable)"
     mocap_path = directory / MOCAP
     mocap = parse_bvh(mocap_path.read_bytes(), name=mocap_path.stem) if mocap_path.is_file() else None
-    for name, category, doc, asset in rigged_assets(directory, report.skipped):
+    for name, category, doc, asset in rigged_assets(directory, report.skipped, split):
         if name in EXCLUDED or (only and name not in only):
             continue
         if not doc.items("animations"):

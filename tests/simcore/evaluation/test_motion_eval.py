@@ -48,3 +48,14 @@ def test_the_artist_deviation_is_floored_at_a_pixel_of_a_median_edge():
     assert rigid.stretch_ratio == pytest.approx(0.8) and rigid.within_bound
     rigid.deviation_floor = deviation_floor(*coarse)
     assert rigid.stretch_ratio == pytest.approx(8.0) and not rigid.within_bound
+
+
+def test_a_split_evaluates_only_the_files_the_manifest_lists_for_it(dev_assets, tmp_path):
+    """The training corpus layout (MANIFEST.tsv with `file` and `split` columns, files in a subfolder)."""
+    (tmp_path / "rigged").mkdir()
+    for file in ("simple_skin.gltf", "rigged_simple.glb"):
+        (tmp_path / "rigged" / file).symlink_to(dev_assets / file)
+    (tmp_path / "MANIFEST.tsv").write_text("name\tfile\tcategory\tsplit\nsimple_skin\trigged/simple_skin.gltf\tother\tval\n"
+                                           "rigged_simple\trigged/rigged_simple.glb\tother\ttrain\n")
+    report = evaluate_motion(tmp_path, use_predicted=False, split="val")
+    assert {r.name for r in report.rows} == {"simple_skin"} and report.rows[0].category == "other"
