@@ -1,10 +1,11 @@
-"""Rigs from motion speed: a 5,000-vertex × 100-frame mesh sequence rigged from its motion (target ≤ 60 s).
+"""Rigs from motion speed: a 5,000-vertex × 100-frame mesh sequence rigged from its motion (target ≤ 60 CPU s).
 
 Sequence: a generated tube of 50 rings × 100 vertices skinned to a 12-joint chain, posed by a seeded random
 motion (simcore.evaluation.motion_sequences.tube_sequence). Rows: the automatic bone count and a fixed one
 (`--bones`). Reference in the same run: free-bone Dem Bones alone at the count each row chose (what the rig adds
-on top is joints, the tree and the re-fit). Wall and CPU seconds both: on shared cores the wall time counts other
-work. Prints a table and writes bench/results/motion_rig.json.
+on top is joints, the tree, the re-fit and the shape joints). Wall and CPU seconds both: on shared cores the wall
+time counts other work, so the budget is checked on CPU seconds (the solve runs on one thread). Prints a table and
+writes bench/results/motion_rig.json.
 
     .venv/bin/python bench/motion_rig.py [--bones 24]
 """
@@ -44,17 +45,18 @@ def main() -> None:
     rows = []
     for label, params in (("auto count", MotionRigParams()), (f"{args.bones} bones", MotionRigParams(bones=args.bones))):
         rig, wall, cpu = _timed(lambda params=params: rig_from_motion(seq.rest, seq.faces, seq.frames, seq.fps, params))
-        bones = rig.report["bones"]
+        bones = rig.report["motion_bones"]
         _, free_wall, free_cpu = _timed(lambda bones=bones: solve_free_bones(
             seq.rest, seq.frames, surface, bones, max_influences=4, iterations=MotionRigParams().iterations))
         rows.append({"row": label, "vertices": seq.rest.shape[0], "frames": seq.frames.shape[0], "bones": bones,
+                     "shape_joints": rig.report["shape_joints"],
                      "rmse": rig.report["rmse"], "free_rmse": rig.report["free_bones_rmse"], "wall_s": wall,
-                     "cpu_s": cpu, "within_budget": wall <= BUDGET_S, "dem_bones_alone_wall_s": free_wall,
+                     "cpu_s": cpu, "within_budget": cpu <= BUDGET_S, "dem_bones_alone_wall_s": free_wall,
                      "dem_bones_alone_cpu_s": free_cpu, "count_search": rig.report["count_search"]})
-    head = f"{'row':<12}{'V':>6}{'T':>5}{'bones':>6}{'rmse':>9}{'free':>9}{'wall s':>8}{'cpu s':>7}{'DB wall':>9}{'DB cpu':>8}"
+    head = f"{'row':<12}{'V':>6}{'T':>5}{'bones':>6}{'shape':>6}{'rmse':>9}{'free':>9}{'wall s':>8}{'cpu s':>7}{'DB wall':>9}{'DB cpu':>8}"
     print(head)
     for r in rows:
-        print(f"{r['row']:<12}{r['vertices']:>6}{r['frames']:>5}{r['bones']:>6}{r['rmse']:>9.5f}{r['free_rmse']:>9.5f}"
+        print(f"{r['row']:<12}{r['vertices']:>6}{r['frames']:>5}{r['bones']:>6}{r['shape_joints']:>6}{r['rmse']:>9.5f}{r['free_rmse']:>9.5f}"
               f"{r['wall_s']:>8.1f}{r['cpu_s']:>7.1f}{r['dem_bones_alone_wall_s']:>9.1f}{r['dem_bones_alone_cpu_s']:>8.1f}")
     out = REPO / "bench" / "results" / "motion_rig.json"
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -25,25 +25,29 @@ def _fmt(value: float | None, digits: int) -> str:
 def render(report: MotionRigEvaluation, console: Console) -> None:
     """One row per sequence (rig and free Dem Bones side by side), then the means per motion."""
     table = Table(title="Rigs from motion: RMSE in first-frame bbox diagonals (rig vs free-bone Dem Bones at the same "
-                        "count); J2J/B2B in unit-cube units vs the artist's skeleton (free: the free bones' centres)")
-    for head in ("sequence", "motion", "frames", "vertices", "bones", "sliding"):
+                        "count); J2J/B2B in unit-cube units vs the artist's skeleton (motion: the joints read off the "
+                        "motion alone; free: the free bones' centres); bones: every joint, shape: those of them placed "
+                        "from the mesh's shape, out: joints outside it")
+    for head in ("sequence", "motion", "frames", "vertices", "bones", "shape", "sliding", "out"):
         table.add_column(head)
-    for head in ("rmse rig", "rmse free", "ratio", "J2J", "B2B", "J2J free", "gt joints", "s"):
+    for head in ("rmse rig", "rmse free", "ratio", "J2J", "B2B", "J2J motion", "J2J free", "gt joints", "s"):
         table.add_column(head, justify="right")
     for r in report.rows:
-        cells = [r.name, r.motion, str(r.frames), str(r.vertices), str(r.bones), str(r.sliding)]
+        cells = [r.name, r.motion, str(r.frames), str(r.vertices), str(r.bones), str(r.shape_joints), str(r.sliding),
+                 str(r.outside)]
         if r.error:
-            table.add_row(*cells, "error", "", "", "", "", "", "", _fmt(r.seconds, 1))
+            table.add_row(*cells, "error", "", "", "", "", "", "", "", _fmt(r.seconds, 1))
             continue
         table.add_row(*cells, _fmt(r.rmse, 5), _fmt(r.free_rmse, 5), _fmt(r.ratio, 3), _fmt(r.j2j, 4), _fmt(r.b2b, 4),
-                      _fmt(r.free_j2j, 4), "-" if r.joints_truth is None else str(r.joints_truth), _fmt(r.seconds, 1))
+                      _fmt(r.motion_j2j, 4), _fmt(r.free_j2j, 4), "-" if r.joints_truth is None else str(r.joints_truth), _fmt(r.seconds, 1))
     for motion in MOTIONS:
         if not any(r.motion == motion and not r.error for r in report.rows):
             continue
-        table.add_row("MEAN", motion, "", "", "", "", _fmt(report.mean("rmse", motion), 5),
+        table.add_row("MEAN", motion, "", "", "", "", "", "", _fmt(report.mean("rmse", motion), 5),
                       _fmt(report.mean("free_rmse", motion), 5), _fmt(report.mean("ratio", motion), 3),
                       _fmt(report.mean("j2j", motion), 4), _fmt(report.mean("b2b", motion), 4),
-                      _fmt(report.mean("free_j2j", motion), 4), "", "", style="bold")
+                      _fmt(report.mean("motion_j2j", motion), 4), _fmt(report.mean("free_j2j", motion), 4), "", "",
+                      style="bold")
     print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.motion}: {r.error}" for r in report.rows if r.error))
 
 
@@ -63,7 +67,7 @@ def eval_motion_rig(
     if unknown:
         raise typer.BadParameter(f"unknown motion {unknown[0]!r}; choose from {', '.join(MOTIONS)}", param_hint="--motion")
     tty = sys.stderr.isatty()
-    console = Console(width=None if sys.stdout.isatty() else 160)  # a log keeps every column
+    console = Console(width=None if sys.stdout.isatty() else 200)  # a log keeps every column
     with console.status("rigging from motion…") as status:
         def on_row(name: str) -> None:
             if tty:

@@ -5,7 +5,8 @@ ground-truth skeleton), and each rigged asset posed with the artist's weights by
 random motion (simcore.evaluation.motion_sequences), whose skeleton is the ground truth. Every sequence is rigged
 by `rig_from_motion` with the job's default parameters. Figures: reconstruction RMSE of the rig and of free-bone
 Dem Bones at the same bone count (first frame's bounding-box diagonal), and J2J / B2B (unit-cube units,
-simcore.metrics.skeleton) of the recovered skeleton and, as a baseline, of the free bones' centres.
+simcore.metrics.skeleton) of the recovered skeleton, of its joints read off the motion alone (before the shape
+joints of simcore.motion_rig.shape_joints), and, as a baseline, of the free bones' centres.
 """
 
 from __future__ import annotations
@@ -39,12 +40,15 @@ class MotionRigRow:
     frames: int = 0
     vertices: int = 0
     bones: int = 0
+    shape_joints: int = 0
     sliding: int = 0
+    outside: int = 0
     rmse: float | None = None
     free_rmse: float | None = None
     j2j: float | None = None
     b2b: float | None = None
     free_j2j: float | None = None
+    motion_j2j: float | None = None  # the joints read off the motion alone (before shape joints are added)
     joints_truth: int | None = None
     seconds: float = 0.0
     error: str | None = None
@@ -71,7 +75,8 @@ class MotionRigEvaluation:
 
     def to_dict(self) -> dict[str, Any]:
         rows = [{**asdict(r), "ratio": r.ratio} for r in self.rows]
-        summary = {f"{key}_{kind}": self.mean(key, kind) for key in ("rmse", "free_rmse", "j2j", "b2b", "free_j2j")
+        summary = {f"{key}_{kind}": self.mean(key, kind) for key in ("rmse", "free_rmse", "j2j", "b2b", "free_j2j",
+                                                                        "motion_j2j")
                    for kind in MOTIONS}
         summary.update(worst_ratio=self.worst("ratio"), worst_rmse=self.worst("rmse"), worst_j2j=self.worst("j2j"))
         return {"rows": rows, "summary": summary, "skipped": self.skipped}
@@ -112,10 +117,13 @@ def _free_centres(rig: MotionRig) -> np.ndarray:
 def _score(row: MotionRigRow, rig: MotionRig, seq: PosedSequence | None, rest: np.ndarray, faces: np.ndarray) -> None:
     report = rig.report
     row.bones, row.sliding = int(report["bones"]), int(report["sliding_joints"])
+    row.shape_joints, row.outside = int(report["shape_joints"]), int(report["joints_outside"])
     row.rmse, row.free_rmse = float(report["rmse"]), float(report["free_bones_rmse"])
     if seq is not None:
         scores = skeleton_scores(rig.skeleton, seq.truth, rest, faces)
         row.j2j, row.b2b, row.joints_truth = scores.j2j, scores.b2b, seq.truth.num_joints
+        motion_only = rig.skeleton.without(np.arange(rig.skeleton.num_joints) >= int(report["motion_bones"]))[0]
+        row.motion_j2j = skeleton_scores(motion_only, seq.truth, rest, faces).j2j
         row.free_j2j = graph_scores(_free_centres(rig), np.zeros((0, 2), np.int64), seq.truth, rest, faces).j2j
 
 

@@ -1,4 +1,5 @@
-"""Rig a mesh sequence: free bones (Dem Bones) → joint tree → bone motion and weights re-fitted on the tree."""
+"""Rig a mesh sequence: free bones (Dem Bones) → joint tree → bone motion and weights re-fitted on the tree →
+joints the motion cannot reveal added from the mesh's shape."""
 
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ from simcore.motion_rig.joint_animation import joint_animation
 from simcore.motion_rig.joints import bone_pairs
 from simcore.motion_rig.rigid_merge import merge_moving_alike
 from simcore.motion_rig.sequence_weld import seam_triangles
+from simcore.motion_rig.shape_joints import add_shape_joints
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.types import Skeleton
 
@@ -41,7 +43,8 @@ class MotionRigParams:
     cannot fill, or the count before one that cuts the error by less than `min_gain` (when that count's error is
     below `usable_rmse`: a flat stretch of a curve still far off is a solver that stalls); else `max_bones`.
     The tree's weights and transforms alternate (`refit_on_tree`) until the rig is as close as free bones, the
-    error stalls (`round_gain`, `patience`) or `rounds` run out.
+    error stalls (`round_gain`, `patience`) or `rounds` run out. Shape joints (`shape_reach`) fill the parts the
+    motion never bends, within `max_bones` joints in all.
     """
 
     max_influences: int = 4
@@ -51,7 +54,7 @@ class MotionRigParams:
     min_gain: float = 0.15
     usable_rmse: float = 0.01  # a flattening curve ends the search only at a count whose error is below this
     kmeans_margin: float = 0.5  # k-means start kept when its search error is below this share of Dem Bones' own
-    search_counts: tuple[int, ...] = (4, 8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
+    search_counts: tuple[int, ...] = (2, 4, 8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
     search_frames: int = 12  # frames (evenly spread) the count search fits
     search_iterations: int = 3  # Dem Bones iterations while choosing the count
     iterations: int = 12  # Dem Bones iterations of the chosen count's fit
@@ -67,13 +70,16 @@ class MotionRigParams:
     inside_resolution: int = 64  # voxels along the longest side of the solid that joints are moved into
     round_gain: float = 0.01  # alternations stop once `patience` rounds in a row cut the error by less than this
     patience: int = 2
+    shape_reach: float | None = 1.0  # shape-skeleton joints this many local thicknesses from every motion joint
+    # are added (simcore.motion_rig.shape_joints); None adds none
 
 
 @dataclass
 class MotionRig:
     """The recovered rig: skeleton (rest = `rest`), weights (V, J) float32 CSR rows summing to 1, its animation,
-    and `report` (bone count, per-frame RMSE of the rig and of free bones in units of the first frame's
-    bounding-box diagonal, times)."""
+    and `report` (joint count, of them the bones read off the motion and the shape joints, per-frame RMSE of the
+    rig and of free bones at the motion's bone count in units of the first frame's bounding-box diagonal, times).
+    The motion's joints come first in the skeleton, the shape joints after them."""
 
     skeleton: Skeleton
     weights: sp.csr_matrix
@@ -234,14 +240,21 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     weights = weights / np.maximum(weights.sum(axis=1, keepdims=True), 1e-12)
     names = ["root"] + [f"bone_{i:02d}" for i in range(1, len(tree.order))]
     skeleton = Skeleton(joints, tree.parents, names).validate()
+    added = 0
+    if params.shape_reach is not None:
+        grown = add_shape_joints(rest, faces, skeleton, weights, transforms, grid, reach=params.shape_reach,
+                                 max_joints=params.max_bones, max_influences=params.max_influences)
+        skeleton, weights, transforms, added = grown.skeleton, grown.weights, grown.transforms, len(grown.owner)
     animation = joint_animation(skeleton, transforms, fps, name)
     rig_error = rmse(reconstruct(rest, weights, transforms), frames) / diag
     report = {
         "bones": skeleton.num_joints,
+        "motion_bones": skeleton.num_joints - added,  # the free-bone count the RMSE figures compare at
+        "shape_joints": added,
         "sliding_joints": int(tree.sliding.sum()),
         "merged_bones": merged,
         "joints_moved_inside": int(moved_in.sum()),
-        "joints_outside": int((~grid.inside(joints)).sum()),
+        "joints_outside": int((~grid.inside(skeleton.positions)).sum()),
         "separate_part_joints": int(tree.floating.sum() - tree.sliding.sum()) - 1,
         "frames": int(frames.shape[0]),
         "vertices": int(frames.shape[1]),
