@@ -59,8 +59,9 @@ async def verified_key(secret: str) -> ApiKey | None:
 async def current_key(request: Request, credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer)]) -> ApiKey:
     """The active key named by `Authorization: Bearer <key>`, its request counted against its rate limit (429 past it).
     Keys in URLs are refused: URLs end up in access logs, browser history and shared links (downloads have signed links,
-    events are read with the header). Every /api/v1 route but signed downloads takes it, once per request: one
-    dependency, where a separate rate-limit dependency on the same key would make FastAPI solve the key's twice."""
+    events are read with the header). Every /api/v1 route but signed downloads takes it. One dependency for both: FastAPI
+    solves a dependency's own dependencies before it looks in its per-request cache, so a rate-limit dependency on
+    this one would solve its bearer scheme twice per request."""
     if "key" in request.query_params:
         raise Problem(401, "key_in_url", "send the API key in the 'Authorization: Bearer <key>' header, never in the URL; "
                       "to download without a key use the job's download_url", field="key", headers={"WWW-Authenticate": "Bearer"})

@@ -31,8 +31,7 @@ from api.webhooks.urls import checked_callback_url
 from simcore.io.json_bounds import JsonTooDeep, loads_bounded
 from simcore.options import JobOptions
 
-router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"],
-                   responses=problem_responses(401, 429))
+router = APIRouter(prefix="/api/v1/jobs", tags=["jobs"], responses=problem_responses(401, 429))
 MAX_OPTIONS_DEPTH = 8  # JobOptions nests 3 deep (refine.bone_stiffness)
 OPTIONS_EXAMPLE = {"skeleton": "auto", "skinning": "auto", "motion": {"in_place": True}, "fbx": True}
 

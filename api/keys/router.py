@@ -20,8 +20,7 @@ from api.keys import service
 from api.models import ApiKey
 from api.problem_schema import problem_responses
 
-router = APIRouter(prefix="/api/v1/keys", tags=["keys"],
-                   responses=problem_responses(401, 429))
+router = APIRouter(prefix="/api/v1/keys", tags=["keys"], responses=problem_responses(401, 429))
 
 
 class KeyOut(BaseModel):

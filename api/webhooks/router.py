@@ -18,8 +18,7 @@ from api.problem_schema import problem_responses
 from api.webhooks.signing import new_secret
 from api.webhooks.urls import checked_callback_url
 
-router = APIRouter(prefix="/api/v1/keys/me/webhook", tags=["keys"],
-                   responses=problem_responses(401, 429))
+router = APIRouter(prefix="/api/v1/keys/me/webhook", tags=["keys"], responses=problem_responses(401, 429))
 
 
 class WebhookConfig(BaseModel):
