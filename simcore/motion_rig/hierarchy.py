@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.sparse.csgraph import minimum_spanning_tree, shortest_path
 
 from simcore.motion_rig.joints import BonePairs
@@ -19,7 +20,8 @@ class BoneTree:
     joints:    (B, 3) float64 rest-pose joint of each bone with its parent (the root's: its vertices' centre).
     floating:  (B,) bool bones whose joint moves freely (an animated offset from the parent): the root, bones of a
                mesh part that touches no other bone (hung from the nearest bone, at their own centre), and bones
-               whose motion has no pivot with their parent's (`sliding`: the joint at that pair's best point).
+               whose motion has no pivot with their parent's (`sliding`: the joint at the centre of their border,
+               since the best point of a pair that turns about none can lie far off).
     borders:   (B, 3) float64 centre of each bone's border with its parent (the root's, a separate part's: its
                vertices' centre): a point inside the surface near the joint.
     stiffness: (B, 3, 3) float64 the pair's `BonePairs.stiffness` with the parent (zero where there is no pair).
@@ -55,7 +57,7 @@ def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: fl
     ceiling = (join.max() if len(join) else 0.0) + spacing.max() + 1.0  # bridges only where nothing touches
     bridge = ~touching & ~np.eye(count, dtype=bool)
     cost[bridge] = ceiling + spacing[bridge]
-    tree = minimum_spanning_tree(cost)
+    tree = minimum_spanning_tree(sp.csr_matrix(cost))  # sparse: a dense graph reads costs near 0 as no edge
     tree = tree + tree.T
     edges = tree.tocoo()
     lengths = tree.copy()
@@ -81,7 +83,7 @@ def bone_tree(rest: np.ndarray, weights: np.ndarray, pairs: BonePairs, slide: fl
         key = (min(up, bone), max(up, bone))
         floating[i] = key not in pivot_of
         sliding[i] = up >= 0 and key in best and key not in pivot_of
-        joints[i] = pivot_of.get(key, best.get(key, centres[bone]))
+        joints[i] = pivot_of.get(key, border.get(key, centres[bone]))  # a free joint's place changes no fit
         borders[i] = border.get(key, centres[bone])
         stiffness[i] = firm.get(key, np.zeros((3, 3)))
     parents = np.array([index[parent_of[bone]] if parent_of[bone] >= 0 else -1 for bone in order], np.int64)
