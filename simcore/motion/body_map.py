@@ -65,9 +65,44 @@ def fill_by_region(source: Skeleton, target: Skeleton, mapping: dict[int, int]) 
 
 
 def region_mapping(source: Skeleton, target: Skeleton) -> dict[int, int]:
-    """Target joint → the source joint whose bones lie nearest its own (both skeletons in one body and frame)."""
+    """Target joint → the source joint whose bones lie nearest its own (both skeletons in one body and frame).
+
+    A branching target joint whose branches go down different source branches takes, of the joint where they
+    meet and the joints above it (`branch_candidates`), the one whose bones lie nearest its own, when that one
+    lies within its reach (its bones no farther from the target joint's, on average, than its farthest child
+    is from it): otherwise the branches meet only far away (separate characters under a scene root) and the
+    joint keeps the nearest bones.
+    """
     cost = _region_cost(source, target)
-    return {j: int(np.argmin(cost[j])) for j in range(target.num_joints)}
+    out = {j: int(np.argmin(cost[j])) for j in range(target.num_joints)}
+    children = target.children()
+    for j in sorted(range(target.num_joints), key=lambda k: -_depth(target.parents, k)):  # children first
+        candidates = branch_candidates(source.parents, [out[c] for c in children[j]])
+        if not candidates or out[j] in candidates:
+            continue
+        best = min(candidates, key=lambda s: cost[j, s])
+        reach = np.linalg.norm(target.positions[children[j]] - target.positions[j], axis=1).max()
+        if cost[j, best] <= reach:
+            out[j] = best
+    return out
+
+
+def branch_candidates(parents: np.ndarray, below: list[int]) -> list[int]:
+    """The source joints a branching target joint may take when its children map to the source joints `below`:
+    the joint where the branches going down meet (their lowest common ancestor) and every joint above it.
+    A child mapped above another child's joint runs up the source tree (the two skeletons are rooted at
+    different places) and does not count. Empty when fewer than two branches go down or they never meet."""
+    down = sorted({b for b in below if not any(a != b and is_at_or_below(parents, a, b) for a in below)})
+    if len(down) < 2:
+        return []
+    path, a = [], down[0]
+    while a >= 0:
+        path.append(a)
+        a = int(parents[a])
+    for k, a in enumerate(path):
+        if all(is_at_or_below(parents, b, a) for b in down[1:]):
+            return path[k:]
+    return []
 
 
 def _depth(parents: np.ndarray, j: int) -> int:

@@ -16,11 +16,16 @@ Method (world-space delta transfer):
 3. Per frame, the source joint's world delta rotation D_s = R_world(t) · R_rest⁻¹ drives the target:
    D_t = D_s · A_j; unmapped target joints ride rigidly with their parent. Target locals follow from
    D_t · R_bind (R_bind = the target's bind orientation, identity for world-aligned skeletons).
-4. Root motion: the source root's displacement scaled by the hip-height ratio (in place if asked), then a
+4. Root motion: the source root's displacement scaled by the hip-height ratio (in place if asked; for one body,
+   the displacement of the point where our root sits, carried by the source joint it follows, as that joint
+   turns about its own place, not ours), then a
    per-frame vertical correction that keeps the target's lowest contact joint as high above the target's
    ground as the source's is above its own (feet stay on the floor, jumps keep their height). For one body,
    the source's contact joints are those the target's contact joints map to (IK rigs hang the feet off a
    floor root, outside the subtree that carries the root motion).
+5. Bones both skeletons share (a joint and its parent mapped to a source joint and its parent) also take the
+   offsets the clip animates on them (`bone_offsets`: a popping head, an IK foot, a second character's root);
+   every other bone stays rigid.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput
 from simcore.motion.body_map import fill_by_region, region_mapping
+from simcore.motion.bone_offsets import bone_offsets
 from simcore.motion.chain_match import chain_mapping, normalised_rest, quarter_turn
 from simcore.motion.joint_map import name_mapping, skeleton_slots
 from simcore.motion.timing import resample
@@ -293,11 +299,6 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
         else:
             delta_t[:, j] = delta_t[:, p] if p >= 0 else np.eye(3)
 
-    # Positions with rigid bones, then root motion and ground contact on the motion root's subtree.
-    pos_t = np.empty((t_count, j_count, 3))
-    for j in range(j_count):
-        p = int(parents[j])
-        pos_t[:, j] = target.positions[j] if p < 0 else pos_t[:, p] + delta_t[:, p] @ (target.positions[j] - target.positions[p])
     depth = np.zeros(j_count, np.int64)
     for j in range(1, j_count):
         depth[j] = depth[parents[j]] + 1
@@ -316,8 +317,20 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
         scale = ht / hs
     else:
         scale = float(np.ptp(target.positions, axis=0).max() / max(np.ptp(rest_s, axis=0).max(), 1e-9))
+    # Positions with the bones rigid but for the offsets the clip animates on bones both skeletons share, then
+    # root motion and ground contact on the motion root's subtree.
+    offsets = bone_offsets(source, rest_s, pos_s, delta_s, target, mapping, scale)
+    carried = np.flatnonzero(np.abs(offsets).max(axis=(0, 2)) > 0)
+    pos_t = np.empty((t_count, j_count, 3))
+    for j in range(j_count):
+        p = int(parents[j])
+        rigid = target.positions[j] if p < 0 else pos_t[:, p] + delta_t[:, p] @ (target.positions[j] - target.positions[p])
+        pos_t[:, j] = rigid + offsets[:, j]
     anchor = rest_s[source_root] if clip.rest_is_standing else pos_s[0, source_root]
     desired = target.positions[motion_root] + scale * (pos_s[:, source_root] - anchor)
+    if same_body:  # one body: our root moves as the point where it sits moves on the source joint it follows
+        lever = target.positions[motion_root] - rest_s[source_root]
+        desired += np.einsum("tab,b->ta", delta_s[:, source_root], lever) - lever
     if options.in_place:
         desired[:, [0, 2]] = target.positions[motion_root, [0, 2]]
     shift = desired - pos_t[:, motion_root]
@@ -336,11 +349,9 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     local_rot = np.where(is_root, world_rot, np.swapaxes(world_rot[:, par], -1, -2) @ world_rot)
     rest_local = kinematics.rest_local_matrices(target)[:, :3, 3]
     local_tr = np.broadcast_to(rest_local, (t_count, j_count, 3)).copy()
-    if parents[motion_root] < 0:
-        local_tr[:, motion_root] = pos_t[:, motion_root]
-    else:
-        p = int(parents[motion_root])
-        local_tr[:, motion_root] = np.einsum("tba,tb->ta", world_rot[:, p], pos_t[:, motion_root] - pos_t[:, p])
+    for j in {motion_root, *carried.tolist()}:
+        p = int(parents[j])
+        local_tr[:, j] = pos_t[:, j] if p < 0 else np.einsum("tba,tb->ta", world_rot[:, p], pos_t[:, j] - pos_t[:, p])
     quats = Rotation.from_matrix(local_rot.reshape(-1, 3, 3)).as_quat().reshape(t_count, j_count, 4)
     out = JointAnimation(list(target.names), anim.fps, quats, local_tr, anim.name, bool(options.loop))
     mapped_source = set(mapping.values())

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from simcore.motion.body_map import fill_by_region
+from simcore.motion.body_map import branch_candidates, fill_by_region, region_mapping
 from simcore.motion.retarget import map_joints, one_pivot_per_source_joint, retarget
 from simcore.motion.types import JointAnimation, MotionClip
 from simcore.skeleton import kinematics
@@ -102,3 +102,51 @@ def test_feet_hanging_off_a_floor_root_keep_the_floor():
     assert out.mapping["t_foot"] == "foot" and out.contact_joints == ["t_foot", "t_toe"]
     feet = _world(target, out.animation)[:, 2, 1, 3]
     assert np.allclose(feet, 0.05, atol=1e-9)
+
+
+def test_a_branching_joint_takes_the_joint_where_its_branches_meet():
+    """A quadruped's chest: our hub sits off-centre, nearest the source's left leg bone, but its branches (both
+    front legs and the neck) map into three source branches that meet at the chest: the hub takes the chest,
+    so the chest no longer swings with one leg."""
+    source = Skeleton(np.array([[0.0, 1.0, -0.5], [0.0, 1.0, 0.0], [0.1, 0.95, 0.05], [0.1, 0.5, 0.05], [-0.1, 0.95, 0.05],
+                                [-0.1, 0.5, 0.05], [0.0, 1.2, 0.3], [0.0, 1.4, 0.5]]), np.array([-1, 0, 1, 2, 1, 4, 1, 6]),
+                      ["spine", "chest", "leg_l", "foot_l", "leg_r", "foot_r", "neck", "head"]).validate()
+    target = Skeleton(np.array([[0.0, 1.0, -0.5], [0.08, 0.9, 0.05], [0.1, 0.6, 0.05], [-0.1, 0.6, 0.05], [0.0, 1.3, 0.4]]),
+                      np.array([-1, 0, 1, 1, 1]), ["t_spine", "t_hub", "t_l", "t_r", "t_neck"]).validate()
+    mapping = region_mapping(source, target)
+    assert [source.names[mapping[j]] for j in range(5)] == ["spine", "chest", "leg_l", "leg_r", "neck"]
+    assert branch_candidates(source.parents, [3, 5, 7]) == [1, 0]  # the chest and the spine above it
+    assert branch_candidates(source.parents, [3, 5, 0]) == [1, 0]  # a child mapped up the tree does not count
+    assert branch_candidates(source.parents, [3, 2]) == []  # one branch going down
+
+
+def test_our_root_swings_with_the_source_joint_it_follows_about_that_joints_place():
+    """Our root sits 0.7 above the source's hip it follows (a chest-high hub). The hip tips 30° forward: our root
+    moves as the point at its place on the hip does (forward and down), not turning in place."""
+    source = _strip([1.0, 1.5], "s")
+    target = _strip([1.7, 2.0], "t")
+    frames = 2
+    rot = np.tile([0.0, 0.0, 0.0, 1.0], (frames, 2, 1))
+    rot[1, 0] = Rotation.from_rotvec([np.pi / 6, 0.0, 0.0]).as_quat()
+    anim = JointAnimation(["s0", "s1"], 30.0, rot, np.broadcast_to(kinematics.rest_local_matrices(source)[:, :3, 3], (frames, 2, 3)).copy())
+    clip = MotionClip(source, anim, rest_is_standing=True, source_format="test", shares_bind_pose=True)
+    from simcore.options import MotionOptions
+
+    out = retarget(clip, target, MotionOptions(joint_map={"s0": "t0", "s1": "t1"}))
+    root = _world(target, out.animation)[1, 0, :3, 3]
+    expected = Rotation.from_rotvec([np.pi / 6, 0.0, 0.0]).apply([0.0, 0.7, 0.0]) + [0.0, 1.0, 0.0]
+    assert np.allclose(root[[0, 2]], expected[[0, 2]], atol=1e-9)  # the ground correction may move it up or down only
+
+
+def test_a_joint_between_two_characters_keeps_the_nearest_bones():
+    """Two characters side by side under a scene root far below them: a target joint whose branches run into
+    both meets them only at that scene root, out of its reach, so it keeps the body whose bones lie nearest."""
+    pos = [[0.0, -3.0, 0.0], [0.0, -3.0, 0.0], [-0.3, 1.0, 0.0], [-0.6, 1.0, 0.0], [-0.9, 1.0, 0.0],
+           [0.0, -3.0, 0.0], [0.35, 1.0, 0.0], [0.6, 1.0, 0.0], [0.9, 1.0, 0.0]]
+    source = Skeleton(np.array(pos), np.array([-1, 0, 1, 2, 3, 0, 5, 6, 7]),
+                      ["scene", "holder_a", "body_a", "arm_a", "hand_a", "holder_b", "body_b", "arm_b", "hand_b"]).validate()
+    target = Skeleton(np.array([[0.0, 1.0, 0.0], [-0.45, 1.0, 0.0], [-0.9, 1.0, 0.0], [0.45, 1.0, 0.0], [0.9, 1.0, 0.0]]),
+                      np.array([-1, 0, 1, 0, 3]), ["t_hub", "t_a", "t_a2", "t_b", "t_b2"]).validate()
+    mapping = region_mapping(source, target)
+    assert source.names[mapping[1]] == "arm_a" and source.names[mapping[3]] == "arm_b"
+    assert source.names[mapping[0]] == "body_a"  # not the scene root both arms meet at
