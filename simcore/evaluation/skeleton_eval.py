@@ -11,7 +11,7 @@ present, else "unknown". The ground-truth skeletons' token counts (naive vs opti
 reported alongside.
 
 `all` runs the voxel baseline and `auto` once, and also scores the best candidate of each method `auto` chose
-among (humanoid, geometric, thinning, learned): the same skeletons those methods give as job options.
+among (humanoid, geometric): the same skeletons those methods give as job options.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from simcore.skeleton.predict import SkeletonPrediction
 
 PREDICTED_METHODS = ("auto", "geometric", "humanoid", "learned")
-CANDIDATE_METHODS = ("humanoid", "geometric", "thinning")  # the rows `all` takes from auto's candidates
+CANDIDATE_METHODS = ("humanoid", "geometric")  # the rows `all` takes from auto's candidates
 METHODS = ("all", "voxel", *PREDICTED_METHODS)
 __all__ = ["AssetResult", "EvalCase", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "load_case",
            "read_categories", "resolve_methods"]

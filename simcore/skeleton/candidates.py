@@ -1,9 +1,9 @@
 """Skeleton candidates: each method proposes skeletons for one mesh; `simcore.skeleton.select` picks one.
 
-Methods: `humanoid` (the Mixamo template fitted on the medial tree; none when no biped layout is found),
-`geometric` (medial thinning with the special-case rules of `simcore.skeleton.geometric_rules`), `thinning` (the
-same with every rule off), which `auto` weighs; and `learned` (the skeleton-token model's decoded sequences, several
-per mesh), of which the `learned` method keeps the best.
+Methods: `humanoid` (the Mixamo template fitted on the medial tree; none when no biped layout is found) and
+`geometric` (medial thinning with the special-case rules of `simcore.skeleton.geometric_rules`), which `auto`
+weighs; and `learned` (the skeleton-token model's decoded sequences, several per mesh), of which the `learned` method
+keeps the best.
 """
 
 from __future__ import annotations
@@ -59,8 +59,8 @@ def humanoid_candidate(vertices: np.ndarray, faces: np.ndarray, parts: list[Surf
 
 
 def geometric_candidate(vertices: np.ndarray, faces: np.ndarray, parts: list[SurfacePart], *, max_joints: int,
-                        up: np.ndarray, params: GeometricParams, method: str = "geometric") -> Candidate:
-    """The medial-thinning skeleton with `params` (named `method`: geometric, or thinning with every rule off)."""
+                        up: np.ndarray, params: GeometricParams) -> Candidate:
+    """The geometric method's medial-thinning skeleton with `params`."""
     started = time.perf_counter()
     skeleton, report = geometric_skeleton(vertices, faces, max_joints=max_joints, parts=parts, up=up, params=params)
-    return Candidate(skeleton, method, report, time.perf_counter() - started)
+    return Candidate(skeleton, "geometric", report, time.perf_counter() - started)

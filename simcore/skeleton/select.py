@@ -1,6 +1,6 @@
 """`auto`: pick one skeleton among the candidates of every method by the quality score (no ground truth).
 
-Candidates come in order of preference (the humanoid template, the geometric method, plain thinning): the first
+Candidates come in order of preference (the humanoid template, then the geometric method): the first
 whose score is within MARGIN of the best one wins. On corpus `train` the score's small differences picked worse
 skeletons as often as better ones; a clear gap (a candidate with joints outside the body, stacked joints, bones
 across the body or a lopsided tree on a symmetric mesh) is what it reliably sees.
