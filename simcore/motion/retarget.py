@@ -45,7 +45,7 @@ from simcore.motion.types import JointAnimation, MotionClip
 from simcore.options import MotionOptions
 from simcore.skeleton import kinematics
 from simcore.skeleton.mixamo import BODY_JOINTS
-from simcore.skeleton.types import Skeleton, is_at_or_below, subtree_mask
+from simcore.skeleton.types import Skeleton, is_at_or_below
 
 MIN_BODY_SLOTS = 8  # shared Mixamo body slots needed to trust name matching over structure
 CONTACT_BAND = 0.05  # joints within this fraction of the height above the lowest one touch the floor
@@ -215,6 +215,16 @@ def _contacts(positions: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     return candidates[y <= y.min() + CONTACT_BAND * height]
 
 
+def _subtree(parents: np.ndarray, root: int) -> np.ndarray:
+    """(J,) bool: root and its descendants (parents precede children)."""
+    inside = np.zeros(len(parents), bool)
+    inside[root] = True
+    for j in range(root + 1, len(parents)):
+        if parents[j] >= 0 and inside[parents[j]]:
+            inside[j] = True
+    return inside
+
+
 def _hip_height(positions: np.ndarray, root: int, contacts: np.ndarray) -> float:
     return float(positions[root, 1] - positions[contacts, 1].min())
 
@@ -231,7 +241,7 @@ def _translating_root(source: Skeleton, anim: JointAnimation) -> int:
     depth = np.zeros(source.num_joints, np.int64)
     for j in range(1, source.num_joints):
         depth[j] = depth[source.parents[j]] + 1
-    subtree = np.array([subtree_mask(source.parents, j).sum() for j in range(source.num_joints)])
+    subtree = np.array([_subtree(source.parents, j).sum() for j in range(source.num_joints)])
     candidates = np.flatnonzero(moves)
     return int(min(candidates, key=lambda j: (depth[j], -subtree[j])))
 
@@ -294,9 +304,9 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
         depth[j] = depth[parents[j]] + 1
     motion_root = _motion_root(source, anim, mapping, depth)
     source_root = mapping[motion_root]
-    moving = subtree_mask(parents, motion_root)
+    moving = _subtree(parents, motion_root)
     contacts_t = _contacts(target.positions, np.flatnonzero(moving))
-    contacts_s = _contacts(rest_s, np.flatnonzero(subtree_mask(source.parents, source_root)))
+    contacts_s = _contacts(rest_s, np.flatnonzero(_subtree(source.parents, source_root)))
     touching = sorted({mapping[j] for j in contacts_t.tolist() if j in mapping})
     if same_body and touching:  # one body: the source joints at our feet touch its floor (feet may hang off an IK root)
         contacts_s = np.asarray(touching, np.int64)

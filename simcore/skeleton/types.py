@@ -19,15 +19,6 @@ def is_at_or_below(parents: np.ndarray, a: int, b: int) -> bool:
     return False
 
 
-def subtree_mask(parents: np.ndarray, root: int) -> np.ndarray:
-    """(J,) bool: `root` and its descendants (parents listed before children)."""
-    inside = np.zeros(len(parents), bool)
-    inside[root] = True
-    for j in range(root + 1, len(parents)):
-        inside[j] = parents[j] >= 0 and inside[parents[j]]
-    return inside
-
-
 def parents_first_order(parents: np.ndarray) -> np.ndarray:
     """(J,) int64 permutation listing every joint after its parent; the identity when that already holds (each
     pass takes, in index order, the joints whose parent is placed). Raises InvalidInput on a cycle or a parent

@@ -39,10 +39,9 @@ def corpus_characters(root: Path, split: str, skipped: dict[str, str]) -> Iterat
 
 
 def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str], *, train: Make, val: Make,
-                   body: Make, part: Make | None = None) -> tuple[Iterator[Job], int]:
+                   body: Make) -> tuple[Iterator[Job], int]:
     """(jobs for sample_cache.fill_cache, their count): corpus train characters made by `train`, corpus val by
-    `val`, the corpus train characters again by `part` when given (samples named <name>-part), then `bodies`
-    anny bodies by `body`."""
+    `val`, then `bodies` anny bodies by `body`."""
     from simcore.training.anny_bodies import anny_bodies
 
     sources = [list(corpus_characters(corpus, "train", skipped)), list(corpus_characters(corpus, "val", skipped))]
@@ -54,11 +53,8 @@ def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str]
         for source, (split, make) in enumerate((("train", train), ("val", val))):
             for i, c in enumerate(sources[source]):
                 yield job(split, make, c, np.random.default_rng([seed, source, i]))
-        if part is not None:
-            for i, c in enumerate(sources[0]):
-                yield "train", f"{c.name}-part", partial(part, c, np.random.default_rng([seed, 4, i]))
         people = anny_bodies(bodies, np.random.default_rng([seed, 2])) if bodies else iter(())
         for i, c in enumerate(people):
             yield job("train", body, c, np.random.default_rng([seed, 3, i]))
 
-    return jobs(), len(sources[0]) * (1 if part is None else 2) + len(sources[1]) + bodies
+    return jobs(), len(sources[0]) + len(sources[1]) + bodies

@@ -22,9 +22,6 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         f"- {data_config['variants']} variants of each corpus character: the bind pose, frames of its own clips and random poses "
         f"(±{data_config['pose_degrees']:g}°/√3 per axis) skinned with the artist weights, mid-edge subdivision on every other variant, "
         "a random turn about up and scale in [0.5, 2]",
-        *([f"- {data_config['crops']} part crops of each corpus training character: a random non-root joint's subtree with the "
-           "vertices bound mostly to it, weights renormalised over it (its root takes the parent's share; half the crops keep the "
-           "parent as an unbound root), posed, turned and scaled at random"] if data_config.get("crops") else []),
         f"- {data_config['vertices']} random vertices kept per training sample, {data_config['val_vertices']} per val character",
         f"- samples: {summary['train_samples']} train, {summary['val_samples']} val; per category: {json.dumps(summary['categories'])}; "
         f"characters that failed to build: {data_summary.get('failed', 0)}",

@@ -1,8 +1,7 @@
 """`rigforge train data`: the learned skinning model's training and validation samples, cached as .npz.
 
 Sources: the corpus (`MANIFEST.tsv` split `train` for training, `val` for model selection) with each file's
-own clips for re-posing, part crops of the corpus train characters (a limb, tail or upper body with its
-joint subtree), and `anny` bodies (train only). Validation samples are the characters as they come
+own clips for re-posing, and `anny` bodies (train only). Validation samples are the characters as they come
 (bind pose, no augmentation). Deterministic by seed: character i of a source draws from
 default_rng([seed, source, i]). A sample already in the cache is kept (delete the folder to rebuild).
 """
@@ -15,7 +14,7 @@ from pathlib import Path
 
 from simcore.training.characters import Make, character_jobs
 from simcore.training.sample_cache import fill_cache
-from simcore.training.skin_samples import crops, make_sample, normalised, variants
+from simcore.training.skin_samples import make_sample, normalised, variants
 
 
 @dataclass(frozen=True)
@@ -29,7 +28,6 @@ class DataConfig:
     vertices: int = 3000  # kept per sample
     val_vertices: int = 4000
     pose_degrees: float = 35.0
-    crops: int = 0  # part crops of each corpus training character
     seed: int = 0
 
 
@@ -42,7 +40,5 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
 
     jobs, total = character_jobs(
         Path(config.corpus), config.seed, config.anny_bodies, skipped, train=posed(config.variants),
-        val=lambda c, rng: [make_sample(normalised(c), rng, config.val_vertices).arrays()], body=posed(config.anny_variants),
-        part=(lambda c, rng: [make_sample(p, rng, config.vertices).arrays() for p in crops(c, rng, config.crops, config.pose_degrees)])
-        if config.crops else None)
+        val=lambda c, rng: [make_sample(normalised(c), rng, config.val_vertices).arrays()], body=posed(config.anny_variants))
     return fill_cache(out, asdict(config), jobs, total, skipped, report)

@@ -4,9 +4,7 @@ and targets.
 Augmentations (UniRig's): the character re-posed by one of its own clips' frames or by random bone
 rotations (vertices skinned with the artist's weights, joints moved with their bones, so the posed shape is a
 new character with the same weights), a random turn about the up axis and a random scale, and mid-edge
-subdivision (a denser mesh with interpolated weights) so the model cannot key on vertex density. Part
-crops cut a limb, tail or upper body out of a character with its joint subtree, so the model also sees rigs
-whose root joint carries weight and rigs of a few bones (most full rigs hang from a root that binds nothing). Every
+subdivision (a denser mesh with interpolated weights) so the model cannot key on vertex density. Every
 sample keeps at most `vertices` randomly chosen vertices (features are computed on the whole mesh first).
 
 A sample's targets: the artist weights on each vertex's candidate joints, the mass that falls outside them,
@@ -24,7 +22,7 @@ from scipy.spatial.transform import Rotation
 
 from simcore.metrics.skinning import protocol_skin_matrices, unit_cube_frame
 from simcore.skeleton.kinematics import global_transforms, random_pose_locals, skinning_matrices
-from simcore.skeleton.types import Skeleton, parents_first_order, subtree_mask
+from simcore.skeleton.types import Skeleton, parents_first_order
 from simcore.skinning.lbs import linear_blend
 from simcore.skinning.pair_features import SkinInputs, skin_inputs
 
@@ -101,50 +99,6 @@ def subdivided(character: Character) -> Character:
     vertices = np.concatenate([character.vertices, average @ character.vertices])
     weights = sp.vstack([character.weights, average @ character.weights]).tocsr()
     return Character(character.name, character.category, vertices, faces, character.skeleton, weights)
-
-
-def cropped(character: Character, rng: np.random.Generator, min_vertices: int = 100) -> Character | None:
-    """A random part of a (normalised, parents-first) character: a non-root joint's subtree with the faces whose
-    vertices put most of their weight on it, weights renormalised over the subtree (its root now takes what the
-    parent bound). Half the crops keep the parent as an unbound root above the subtree, as full rigs have one.
-    None when no subtree of at least two joints holds `min_vertices` vertices and less than the whole body."""
-    parents = character.skeleton.parents
-    weights = sp.csr_matrix(character.weights)
-    options = []
-    for j in range(1, len(parents)):
-        inside = subtree_mask(parents, j)
-        keep = np.asarray(weights[:, np.flatnonzero(inside)].sum(axis=1)).ravel() > 0.5
-        if inside.sum() >= 2 and min_vertices <= keep.sum() < 0.9 * len(keep):
-            options.append((inside, keep))
-    if not options:
-        return None
-    inside, keep = options[int(rng.integers(len(options)))]
-    faces = character.faces[keep[character.faces].all(axis=1)]
-    used = np.unique(faces)
-    if len(used) < min_vertices:
-        return None
-    index = np.full(len(keep), -1)
-    index[used] = np.arange(len(used))
-    bound = np.flatnonzero(inside)
-    joints = bound if rng.uniform() < 0.5 or parents[bound[0]] < 0 else np.concatenate([[parents[bound[0]]], bound])
-    renumber = np.full(len(parents), -1)
-    renumber[joints] = np.arange(len(joints))
-    skeleton = Skeleton(character.skeleton.positions[joints], np.where(joints == joints[0], -1, renumber[parents[joints]]),
-                        [character.skeleton.names[j] for j in joints])
-    w = weights[used][:, joints].multiply(np.isin(joints, bound)[None, :]).tocsr()
-    w = sp.diags(1.0 / np.asarray(w.sum(axis=1)).ravel()) @ w
-    return Character(f"{character.name}-part", character.category, character.vertices[used], index[faces], skeleton, sp.csr_matrix(w))
-
-
-def crops(character: Character, rng: np.random.Generator, count: int, pose_degrees: float) -> list[Character]:
-    """Up to `count` random part crops, each posed at random and turned and scaled like a variant."""
-    base = normalised(character)
-    out = []
-    for _ in range(count):
-        part = cropped(base, rng)
-        if part is not None:
-            out.append(turned(reposed(part, random_pose(part, rng, pose_degrees)), rng))
-    return out
 
 
 @dataclass

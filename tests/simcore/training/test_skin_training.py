@@ -11,7 +11,7 @@ from simcore.model_weights import ModelUnavailable
 from simcore.skinning.attention_model import ModelConfig
 from simcore.skinning.learned import learned_weights, load_model
 from simcore.training.sample_cache import save_sample
-from simcore.training.skin_samples import crops, make_sample, normalised, variants
+from simcore.training.skin_samples import make_sample, variants
 from simcore.training.skin_train import TrainConfig, train_skin
 from tests.simcore.training.creatures import capsule_dog
 
@@ -31,19 +31,6 @@ def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path) -> None:
     assert weights.shape == (len(creature.vertices), creature.skeleton.num_joints)
     np.testing.assert_allclose(weights.sum(axis=1), 1.0, atol=1e-6)
     assert np.all(weights >= 0)
-
-
-def test_part_crops_are_subtrees_whose_root_binds_vertices() -> None:
-    dog = normalised(capsule_dog())
-    parts = crops(dog, np.random.default_rng(0), 3, 30.0)
-    assert parts
-    for part in parts:
-        assert 2 <= part.skeleton.num_joints < dog.skeleton.num_joints
-        assert list(part.skeleton.parents[:1]) == [-1] and np.all(part.skeleton.parents[1:] >= 0)
-        assert set(part.skeleton.names) <= set(dog.skeleton.names)
-        np.testing.assert_allclose(np.asarray(part.weights.sum(axis=1)).ravel(), 1.0)
-        assert part.weights[:, 0].sum() > 0 or part.weights[:, 1].sum() > 0  # the subtree's root takes weight
-        assert part.faces.max() < len(part.vertices)
 
 
 @pytest.mark.parametrize("content", [None, b"not a safetensors file"])
