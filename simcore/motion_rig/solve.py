@@ -41,7 +41,8 @@ class MotionRigParams:
     bones: a fixed bone count; None chooses it along `search_counts` (capped by `max_bones`): the first count whose
     free-bone fit reaches `target_rmse` (a share of the first frame's bounding-box diagonal), or that Dem Bones
     cannot fill, or the count before one that cuts the error by less than `min_gain` (when that count's error is
-    below `usable_rmse`: a flat stretch of a curve still far off is a solver that stalls); else `max_bones`.
+    below `usable_rmse`: a flat stretch of a curve still far off is a solver that stalls; a count that fits worse
+    than the best smaller one is skipped, as a fit that stalled); else `max_bones`.
     The tree's weights and transforms alternate (`refit_on_tree`) until the rig is as close as free bones, the
     error stalls (`round_gain`, `patience`) or `rounds` run out. Shape joints (`shape_reach`) fill the parts the
     motion never bends, within `max_bones` joints in all.
@@ -129,6 +130,8 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
         fit, error = tried[best], errors[best]
         trail.append({"bones": fit.num_bones, "asked": count, "rmse": round(error, 6), "start": best})
         progress(0.5 * (i + 1) / len(counts))
+        if before is not None and error > before[1] and fit.num_bones > before[2] and count < counts[-1]:
+            continue  # more bones fitting worse is a fit that stalled, not a flat curve: try the next count
         if before is not None and error > (1.0 - params.min_gain) * before[1] and before[1] <= params.usable_rmse:
             chosen, start = before[0], before[3]  # the curve has flattened: more bones fit detail, not joints
             break
