@@ -212,7 +212,7 @@ def evaluate_character(name: str, category: str, doc: GltfDocument, asset: Rigge
 
         def ours() -> tuple[Skeleton, sp.csr_matrix]:
             skel = predict_skeleton(vertices, asset.faces).skeleton
-            return skel, compute_weights(vertices, asset.faces, skel).weights
+            return skel, compute_weights(vertices, asset.faces, skel, root_deforms=True).weights
 
         targets.append(("ours", ours))
     rows = []

@@ -174,7 +174,7 @@ def pipeline_weights(asset: RiggedAsset) -> tuple[sp.csr_matrix, str]:
     from simcore.skeleton.predict import predict_skeleton
 
     prediction = predict_skeleton(asset.vertices, asset.faces, method="auto")
-    ours = compute_weights(asset.vertices, asset.faces, prediction.skeleton)
+    ours = compute_weights(asset.vertices, asset.faces, prediction.skeleton, root_deforms=True)
     corr = joint_correspondence(prediction.skeleton, asset.skeleton, asset.weights)
     onto = sp.csr_matrix((np.ones(len(corr)), (np.arange(len(corr)), corr)), shape=(len(corr), asset.skeleton.num_joints))
     note = f"{prediction.skeleton.num_joints} joints ({prediction.method}), weights {ours.method}"

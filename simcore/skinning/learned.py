@@ -22,6 +22,7 @@ from simcore.skinning.pair_features import skin_inputs
 WEIGHTS = Path(__file__).parent / "weights" / "skin_attention.safetensors"
 CHUNK = 512  # vertices per forward pass: the (chunk, K, width) activations stay in the CPU cache
 PROGRESS_EVERY = 16  # chunks between progress reports
+ARMATURE_ROOT = "__armature_root__"
 
 
 def learned_summary(path: Path = WEIGHTS) -> str:
@@ -38,11 +39,30 @@ def load_model(path: Path = WEIGHTS) -> SkinAttention:
     return load_weights(path, "skinning", "skinning", lambda sizes: SkinAttention(ModelConfig(**sizes)))
 
 
+def with_armature_root(vertices: np.ndarray, skeleton: Skeleton) -> Skeleton:
+    """`skeleton` under one more root, below its root at the mesh's lowest height: the unweighted armature root
+    most artist rigs (the model's training data) carry, whose child is the body's own centre joint."""
+    below = skeleton.positions[0].copy()
+    below[1] = float(vertices[:, 1].min())
+    return Skeleton(np.vstack([below, skeleton.positions]), np.r_[-1, np.maximum(skeleton.parents + 1, 0)],
+                    [ARMATURE_ROOT, *skeleton.names])
+
+
 def learned_weights(
     vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, *, model_path: Path = WEIGHTS,
-    progress: Callable[[float], None] = lambda fraction: None,
+    progress: Callable[[float], None] = lambda fraction: None, root_deforms: bool = False,
 ) -> np.ndarray:
-    """(V, J) float64 weights, rows summing to 1, predicted by the learned model."""
+    """(V, J) float64 weights, rows summing to 1, predicted by the learned model.
+
+    root_deforms: the skeleton's root is a body joint that bends the mesh (our predicted skeletons) rather than
+    an armature root; the model, which learned that artists leave the armature root unweighted, is then given
+    one above it (`with_armature_root`) and its column is dropped.
+    """
+    if root_deforms:
+        out = learned_weights(vertices, faces, with_armature_root(vertices, skeleton), model_path=model_path,
+                              progress=progress)[:, 1:]
+        total = out.sum(axis=1, keepdims=True)
+        return np.where(total > 0, out / np.where(total > 0, total, 1.0), 1.0 / skeleton.num_joints)
     model = load_model(model_path)
     inputs = skin_inputs(vertices, faces, skeleton, progress=lambda f: progress(0.7 * f))
     out = np.zeros((len(inputs.candidates), skeleton.num_joints))

@@ -89,6 +89,7 @@ def compute_weights(
     max_influences: int = 4,
     smooth_iterations: int = 2,
     progress: Callable[[float], None] | None = None,
+    root_deforms: bool = False,
 ) -> SkinningResult:
     """Skinning weights of a mesh for a skeleton in the same space.
 
@@ -96,7 +97,8 @@ def compute_weights(
     mesh part that leans mostly on one joint bound to that joint alone (parts.py).
     `auto` takes the learned model, which scores better than the hand-written methods on the corpus's `val`
     split (its file carries those figures); when its weights cannot be read, `auto` runs geodesic and heat
-    and keeps the lower unsupervised `score`.
+    and keeps the lower unsupervised `score`. root_deforms: the skeleton was predicted, so its root is a body joint
+    that bends the mesh, not an artist's armature root (the learned method uses it; see learned.py).
     Raises InvalidInput / LimitExceeded for unusable input.
     """
     if method != "auto" and method not in METHODS:
@@ -120,7 +122,8 @@ def compute_weights(
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
-        dense = METHODS[name](v, f, skeleton, progress=lambda fraction: step(0.8 * fraction))
+        extra = {"root_deforms": True} if root_deforms and name == "learned" else {}
+        dense = METHODS[name](v, f, skeleton, progress=lambda fraction: step(0.8 * fraction), **extra)
         # Smooth on the welded surface so seam duplicates stay identical, then map back.
         on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
         on_welded[welded.index] = dense

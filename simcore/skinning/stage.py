@@ -45,6 +45,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         max_influences=options.max_influences,
         smooth_iterations=options.smooth_iterations,
         progress=report,
+        root_deforms=state.options.skeleton != "keep",
     )
     w = result.weights  # columns of the kept joints → columns of the whole skeleton
     weights = sp.csr_matrix((w.data, kept[w.indices], w.indptr), shape=(w.shape[0], state.skeleton.num_joints))

@@ -190,3 +190,24 @@ def test_floating_part_and_single_joint_still_get_weights(bent_tube, method: Met
     lone = Skeleton(np.zeros((1, 3)), np.array([-1]), ["root"])
     single = compute_weights(v, f, lone, method=method).weights.toarray()
     np.testing.assert_allclose(single, 1.0)
+
+
+def test_armature_root_sits_below_the_root_and_adopts_it(bent_tube) -> None:
+    from simcore.skinning.learned import ARMATURE_ROOT, with_armature_root
+
+    v, _, skeleton = bent_tube
+    grown = with_armature_root(v, skeleton)
+    assert grown.names == [ARMATURE_ROOT, "root", "mid", "tip"]
+    assert grown.parents.tolist() == [-1, 0, 1, 2]
+    assert np.isclose(grown.positions[0, 1], v[:, 1].min())
+    assert np.allclose(grown.positions[1:], skeleton.positions)
+
+
+def test_a_deforming_root_keeps_its_share_under_the_learned_model(bent_tube) -> None:
+    v, f, skeleton = bent_tube
+    plain = compute_weights(v, f, skeleton, method="learned").weights.toarray()
+    body = compute_weights(v, f, skeleton, method="learned", root_deforms=True).weights.toarray()
+    assert body.shape == plain.shape
+    np.testing.assert_allclose(body.sum(axis=1), 1.0, atol=1e-5)
+    _dominant_joint_near_bones(v, skeleton, body)
+    assert body[:, 0].sum() >= plain[:, 0].sum()
