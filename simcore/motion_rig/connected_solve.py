@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from simcore.geometry.similarity import rotation_from_covariance
+
 
 def _procrustes(source: np.ndarray, target: np.ndarray, mass: np.ndarray) -> np.ndarray:
     """(T, 3, 3) rotations R minimising sum_v mass_v |R source_v - target_tv|^2.
@@ -17,10 +19,7 @@ def _procrustes(source: np.ndarray, target: np.ndarray, mass: np.ndarray) -> np.
     source: (N, 3) centred rest points; target: (N, T, 3) centred targets; mass: (N,) non-negative.
     """
     cov = np.tensordot(source * mass[:, None], target, axes=(0, 0)).transpose(1, 2, 0)  # sum target source^T
-    u, _, vt = np.linalg.svd(cov)
-    flip = np.sign(np.linalg.det(u @ vt))
-    u[:, :, 2] *= flip[:, None]
-    return u @ vt
+    return rotation_from_covariance(cov)
 
 
 def _turned(rot: np.ndarray, points: np.ndarray) -> np.ndarray:
