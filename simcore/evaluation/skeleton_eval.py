@@ -84,9 +84,8 @@ class SkeletonEvaluation:
 
     def mean(self, method: str, category: str | None = None) -> dict:
         """Mean of every metric (that all of them have) over the successful rows of `method` (optionally one
-        category), the share of them
-        whose joint count is within JOINT_RATIO of the artist's, and the share with a lower J2J than the voxel
-        baseline on the same asset (when it ran)."""
+        category), the share of them whose joint count is within JOINT_RATIO of the artist's, and the share with a
+        lower J2J than the voxel baseline on the same asset (when it ran)."""
         rows = [r.to_dict() for r in self.results
                 if r.method == method and r.scores is not None and (category is None or r.category == category)]
         failed = sum(1 for r in self.results if r.method == method and r.error is not None

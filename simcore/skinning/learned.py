@@ -61,8 +61,8 @@ def learned_weights(
     if root_deforms:
         out = learned_weights(vertices, faces, with_armature_root(vertices, skeleton), model_path=model_path,
                               progress=progress)[:, 1:]
-        total = out.sum(axis=1, keepdims=True)
-        return np.where(total > 0, out / np.where(total > 0, total, 1.0), 1.0 / skeleton.num_joints)
+        out[out.sum(axis=1) <= 0, 0] = 1.0  # a vertex the model gave wholly to the armature root: the body's root
+        return out / out.sum(axis=1, keepdims=True)
     model = load_model(model_path)
     inputs = skin_inputs(vertices, faces, skeleton, progress=lambda f: progress(0.7 * f))
     out = np.zeros((len(inputs.candidates), skeleton.num_joints))

@@ -5,9 +5,8 @@ that artists bind rigidly to one bone: such a piece never needs to bend, and ble
 stretches it wherever the bones turn apart. A part is a connected component of the welded surface. In a mesh
 of several parts, every part whose weight mass lies at least RIGID_SHARE on one joint is bound to that joint
 alone. Parts that spread their weight wider (a body surface, a sleeve over an elbow) keep a blend, and so does
-a part larger than MAX_PIECE of the whole (a body, not a piece: binding those on a 50 % share made the learned
-weights worse on corpus val); a mesh of one piece is left as it is. A second rule, dropping the joints whose
-bones do not run through a part, made weights and deformation worse on corpus val and is not used.
+a part larger than MAX_PIECE of the whole (a body, not a piece, whose blend the method chose for a reason); a mesh
+of one piece is left as it is.
 """
 
 from __future__ import annotations

@@ -210,4 +210,4 @@ def test_a_deforming_root_keeps_its_share_under_the_learned_model(bent_tube) -> 
     assert body.shape == plain.shape
     np.testing.assert_allclose(body.sum(axis=1), 1.0, atol=1e-5)
     _dominant_joint_near_bones(v, skeleton, body)
-    assert body[:, 0].sum() >= plain[:, 0].sum()
+    assert body[:, 0].sum() > 1.05 * plain[:, 0].sum()  # the root bends the lower tube: it gains weight
