@@ -5,10 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from simcore.geometry.laplacian import adjacency
-from simcore.geometry.weld import weld_vertices
+from simcore.geometry.weld import WeldedMesh, weld_vertices
 
 
 @dataclass
@@ -19,6 +20,19 @@ class SurfacePart:
     points: np.ndarray
     faces: np.ndarray
     area: float
+
+
+def part_labels(vertices: np.ndarray, faces: np.ndarray, tolerance: float | None = None) -> np.ndarray:
+    """(V,) int64 connected-component label of each vertex of the surface welded within `tolerance` (default:
+    `weld_vertices`'), so seam duplicates share one; a face's part is its first vertex's label."""
+    welded = weld_vertices(vertices, faces, tolerance)
+    return welded_part_labels(welded, adjacency(welded.faces, len(welded.vertices)))
+
+
+def welded_part_labels(welded: WeldedMesh, adj: sp.spmatrix) -> np.ndarray:
+    """`part_labels` from a weld and its vertex adjacency that the caller already has."""
+    _, label = connected_components(adj, directed=False)
+    return np.asarray(label, np.int64)[welded.index]
 
 
 def surface_parts(vertices: np.ndarray, faces: np.ndarray) -> list[SurfacePart]:

@@ -18,11 +18,11 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from simcore.geometry.parts import part_labels
 from simcore.geometry.voxelize import VoxelGrid
 from simcore.skeleton.predict import predict_skeleton
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.geodesic import geodesic_weights
-from simcore.skinning.parts import part_labels
 
 NEIGHBOURS = 8  # vertices around a shape joint whose weights name the bone that carries it
 PIECE_SHARE = 0.9  # a separate piece with this share of its weight on one bone moves as one: no joints in it

@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from simcore.geometry.laplacian import adjacency
-from simcore.geometry.weld import weld_vertices
+from simcore.geometry.parts import part_labels
 
 
 def signed_volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -34,9 +32,7 @@ def volume_parts(vertices: np.ndarray, faces: np.ndarray, weld: float = 1e-6) ->
     if len(faces) == 0:
         return np.zeros(0, np.int64)
     size = float(np.ptp(v, axis=0).max()) or 1.0
-    welded = weld_vertices(v, faces, weld * size).index[faces]  # degenerate faces kept: every face gets a part
-    _, labels = connected_components(adjacency(welded, int(welded.max()) + 1), directed=False)
-    return labels[welded[:, 0]].astype(np.int64)
+    return part_labels(v, faces, weld * size)[faces[:, 0]]
 
 
 def part_volumes(frames: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) -> np.ndarray:

@@ -13,10 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
-
-from simcore.geometry.laplacian import adjacency
-from simcore.geometry.weld import WeldedMesh, weld_vertices
 
 RIGID_SHARE = 0.5  # a part with at least this share of its weight mass on one joint follows that joint alone
 MAX_PIECE = 0.35  # only parts whose box diagonal is at most this share of the whole mesh's are pieces
@@ -30,18 +26,6 @@ def _part_sizes(vertices: np.ndarray, labels: np.ndarray, count: int) -> np.ndar
     np.maximum.at(hi, labels, vertices)
     whole = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
     return np.linalg.norm(hi - lo, axis=1) / whole
-
-
-def part_labels(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(V,) int64 connected-component label of each vertex of the welded surface (seam duplicates share one)."""
-    welded = weld_vertices(vertices, faces)
-    return welded_part_labels(welded, adjacency(welded.faces, len(welded.vertices)))
-
-
-def welded_part_labels(welded: WeldedMesh, adj: sp.spmatrix) -> np.ndarray:
-    """`part_labels` from a weld and its vertex adjacency that the caller already has."""
-    _, label = connected_components(adj, directed=False)
-    return np.asarray(label, np.int64)[welded.index]
 
 
 def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_matrix, share: float = RIGID_SHARE,

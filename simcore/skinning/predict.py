@@ -16,6 +16,7 @@ from scipy.spatial import cKDTree
 from simcore.cores import usable_cores
 from simcore.errors import Canceled, InvalidInput, LimitExceeded
 from simcore.geometry.laplacian import adjacency
+from simcore.geometry.parts import part_labels, welded_part_labels
 from simcore.geometry.referenced import ReferencedMesh, referenced_mesh
 from simcore.geometry.weld import weld_vertices
 from simcore.model_weights import ModelUnavailable
@@ -23,7 +24,7 @@ from simcore.skeleton.types import Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import learned_summary, learned_weights
-from simcore.skinning.parts import bind_rigid_parts, part_labels, welded_part_labels
+from simcore.skinning.parts import bind_rigid_parts
 from simcore.skinning.postprocess import smooth_on_surface, top_k
 from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
 from simcore.skinning.quality import quality_scores
