@@ -112,3 +112,25 @@ def test_joints_outside_the_solid_are_moved_inside(tube):
     pinned[2] = np.eye(3)  # a ball joint pinned outside: it stays
     held = joints_inside(grid, replace(tree, stiffness=pinned))
     assert np.allclose(held[1:], joints[1:])
+
+
+@pytest.mark.parametrize(("stalled", "chosen", "asked"), [(0.009, 8, [2, 4, 8]), (0.007, 2, [2, 4])])
+def test_count_search_goes_past_a_count_that_fits_worse(monkeypatch, stalled: float, chosen: int, asked: list[int]):
+    """Scripted search errors: 2 bones 0.008 (usable), 4 bones `stalled`, 8 bones 0.0004 (on target). A count
+    fitting worse than the smaller one stalled and must not read as a flat curve; one that gains a little is
+    the flattening that ends the search at the count before."""
+    from simcore.motion_rig import solve
+    from simcore.motion_rig.free_bones import BoneFit
+
+    def fit(rest, frames, surface, count, params, iterations, start):
+        return BoneFit(np.full((len(rest), count), 1.0 / count), np.tile(np.eye(4), (len(frames), count, 1, 1)))
+
+    errors = {2: 0.008, 4: stalled, 8: 0.0004}
+    monkeypatch.setattr(solve, "_free_fit", fit)
+    monkeypatch.setattr(solve, "_error", lambda rest, frames, f: errors[f.num_bones])
+    rest = np.zeros((20, 3))
+    params = MotionRigParams(search_counts=(2, 4, 8, 16))
+    result, trail = solve.choose_free_bones(rest, np.zeros((5, 20, 3)), np.zeros((0, 3), np.int64), params,
+                                            lambda fraction: None)
+    assert result.num_bones == chosen
+    assert [t["asked"] for t in trail] == asked
