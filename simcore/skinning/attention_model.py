@@ -60,8 +60,10 @@ class SkinAttention(nn.Module):
         return self.bone_context(self.bone_in(bone)[None])[0]
 
     def logits(self, pair: torch.Tensor, bones: torch.Tensor, point: torch.Tensor, candidates: torch.Tensor,
-               prior: torch.Tensor) -> torch.Tensor:
-        """(V, K) logits for a chunk of vertices given the bone embeddings of the whole skeleton."""
+               prior: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
+        """(V, K) logits for a chunk of vertices given the bone embeddings of the whole skeleton. valid (V, K) bool
+        marks real candidates when rows of different skeletons are padded to one K (training batches): padding
+        gets no attention and a -inf logit."""
         p = self.point_in(point)  # (V, w)
         # The first layers read concatenations [pair, bone, point] and [pair, context]: their weights are split so
         # bone and point terms are computed once per bone and per vertex, not once per pair (same result, less work).
@@ -70,13 +72,14 @@ class SkinAttention(nn.Module):
         wp, wb, wq = first.weight.split([PAIR_FEATURES, w, w], dim=1)
         pre = pair @ wp.T + (bones @ wb.T)[candidates] + (p @ wq.T + first.bias)[:, None, :]
         h = self.pair_in[1:](pre)  # (V, K, w)
-        context = self._attend(p, h)[:, None, :]  # (V, 1, w)
+        context = self._attend(p, h, valid)[:, None, :]  # (V, 1, w)
         z = self.norm(h + context)
         top = cast(nn.Linear, self.out[0])
         wz, wc = top.weight.split([w, w], dim=1)
-        return self.out[1:](z @ wz.T + (context @ wc.T + top.bias))[..., 0] + self.prior_scale * prior
+        out = self.out[1:](z @ wz.T + (context @ wc.T + top.bias))[..., 0] + self.prior_scale * prior
+        return out if valid is None else out.masked_fill(~valid, float("-inf"))
 
-    def _attend(self, query: torch.Tensor, pairs: torch.Tensor) -> torch.Tensor:
+    def _attend(self, query: torch.Tensor, pairs: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
         """`self.cross` for one query per vertex over its K pairs: (V, w), (V, K, w) → (V, w).
 
         The key and value projections are moved off the pairs: q·(Wk h) = (Wkᵀ q)·h, and since the attention
@@ -89,7 +92,10 @@ class SkinAttention(nn.Module):
         bq, _, bv = self.cross.in_proj_bias.split(w)
         q = (query @ wq.T + bq).view(-1, heads, d)  # (V, H, d)
         u = torch.einsum("vhd,hdw->vhw", q, wk.view(heads, d, w)) / d**0.5  # (V, H, w)
-        attn = torch.softmax(torch.einsum("vhw,vkw->vhk", u, pairs), dim=-1)
+        scores = torch.einsum("vhw,vkw->vhk", u, pairs)
+        if valid is not None:
+            scores = scores.masked_fill(~valid[:, None, :], float("-inf"))
+        attn = torch.softmax(scores, dim=-1)
         mixed = torch.einsum("vhk,vkw->vhw", attn, pairs)  # (V, H, w)
         values = torch.einsum("vhw,hdw->vhd", mixed, wv.view(heads, d, w)).reshape(-1, w) + bv
         return cast(torch.Tensor, self.cross.out_proj(values))

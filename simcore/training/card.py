@@ -24,9 +24,11 @@ def corpus_line(data_config: dict) -> str:
 
 
 def hardware_line(summary: dict) -> str:
-    """Machine, torch and threads of the run, and how long it took."""
+    """Machine, torch and threads (or GPU) of the run, and how long it took."""
+    config = summary["config"]
+    gpu = f", on {torch.cuda.get_device_name()}" if config.get("device", "cpu").startswith("cuda") else ""
     return (f"- hardware: {platform.machine()} CPU, {os.cpu_count()} cores, torch {torch.__version__} with "
-            f"{summary['config']['threads']} threads; {summary['seconds'] / 60:.1f} min")
+            f"{config['threads']} threads{gpu}; {summary['seconds'] / 60:.1f} min")
 
 
 def write_card(weights: Path, title: str, about: list[str], command: str, data: list[str], training: list[str],

@@ -12,9 +12,11 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import numpy as np
+
 from simcore.training.characters import Make, character_jobs
 from simcore.training.sample_cache import fill_cache
-from simcore.training.skin_samples import make_sample, normalised, variants
+from simcore.training.skin_samples import Character, make_sample, normalised, variants
 
 
 @dataclass(frozen=True)
@@ -28,6 +30,7 @@ class DataConfig:
     vertices: int = 3000  # kept per sample
     val_vertices: int = 4000
     pose_degrees: float = 35.0
+    reroot: float = 0.0  # chance that a variant loses its armature root (skin_samples.rerooted)
     seed: int = 0
 
 
@@ -36,7 +39,10 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
     skipped: dict[str, str] = {}
 
     def posed(count: int) -> Make:
-        return lambda c, rng: [make_sample(v, rng, config.vertices).arrays() for v in variants(c, rng, count, config.pose_degrees)]
+        def make(c: Character, rng: np.random.Generator) -> list[dict[str, np.ndarray]]:
+            augmented = variants(c, rng, count, config.pose_degrees, reroot=config.reroot)
+            return [make_sample(v, rng, config.vertices).arrays() for v in augmented]
+        return make
 
     jobs, total = character_jobs(
         Path(config.corpus), config.seed, config.anny_bodies, skipped, train=posed(config.variants),

@@ -27,6 +27,7 @@ from simcore.skinning.lbs import linear_blend
 from simcore.skinning.pair_features import SkinInputs, skin_inputs
 
 LOSS_POSES = 2
+ARMATURE_SHARE = 0.01  # a root holding at most this share of the weight is an armature root, not a body joint
 
 
 @dataclass
@@ -68,6 +69,40 @@ def reposed(character: Character, skin: np.ndarray) -> Character:
     heads = np.einsum("jab,jb->ja", skin[:, :3, :3], character.skeleton.positions) + skin[:, :3, 3]
     skeleton = Skeleton(heads, character.skeleton.parents, character.skeleton.names)
     return Character(character.name, character.category, vertices, character.faces, skeleton, character.weights)
+
+
+def rerooted(character: Character) -> Character:
+    """The (normalised) character with its armature root taken out, or unchanged when its root is a body joint.
+
+    Most artist rigs hang the body from a root that holds no weight; rigs without one (a Mixamo Hips root, a
+    toy rig's first bone, our predicted skeletons) bend the mesh with their root. Here the root's child whose
+    subtree holds the most weight becomes the root, takes the old root's little weight, and adopts its siblings,
+    so the model sees weighted roots too and must tell the two kinds apart from the geometry, not the root flag.
+    Repeated until the root holds weight.
+    """
+    parents = character.skeleton.parents
+    column = np.asarray(character.weights.sum(axis=0)).ravel()
+    kids = np.flatnonzero(parents == 0)
+    if (parents < 0).sum() != 1 or not len(kids) or column[0] > ARMATURE_SHARE * column.sum():
+        return character
+    subtree = column.copy()
+    for j in range(len(parents) - 1, 0, -1):  # parents first: children's totals are complete before their parent's
+        subtree[parents[j]] += subtree[j]
+    top = int(kids[np.argmax(subtree[kids])])
+    keep = np.r_[top, [j for j in range(1, len(parents)) if j != top]]
+    index = np.full(len(parents), -1)
+    index[keep] = np.arange(len(keep))
+    adopted = np.where(parents == 0, top, parents)[keep]
+    new_parents = np.where(adopted >= 0, index[np.maximum(adopted, 0)], -1)
+    new_parents[0] = -1
+    weights = sp.csr_matrix(character.weights, copy=True).tolil()
+    weights[:, top] = weights[:, top] + weights[:, 0]
+    s = character.skeleton
+    skeleton = Skeleton(s.positions[keep], new_parents, [s.names[j] for j in keep])
+    clips = None if character.clips is None else character.clips[:, keep]
+    out = Character(character.name, character.category, character.vertices, character.faces, skeleton,
+                    sp.csr_matrix(weights.tocsr()[:, keep]), clips)
+    return rerooted(out)  # the new root may be an unweighted control too
 
 
 def random_pose(character: Character, rng: np.random.Generator, degrees: float) -> np.ndarray:
@@ -144,13 +179,16 @@ def make_sample(character: Character, rng: np.random.Generator, vertices: int) -
                       moved.astype(np.float32), posed.astype(np.float32), c.category)
 
 
-def variants(character: Character, rng: np.random.Generator, count: int, pose_degrees: float, *, turn: bool = True) -> list[Character]:
+def variants(character: Character, rng: np.random.Generator, count: int, pose_degrees: float, *, turn: bool = True,
+             reroot: float = 0.0) -> list[Character]:
     """`count` augmented copies: the bind pose first, then clip frames (when it has clips) and random poses in
     turn, every other one subdivided when the mesh is small; each turned and scaled at random unless `turn` is
-    False (the skeleton model turns its own, less: its inputs keep the upload's facing)."""
-    base = normalised(character)
+    False (the skeleton model turns its own, less: its inputs keep the upload's facing). With `reroot` > 0, each
+    copy after the first loses its armature root (`rerooted`) with that chance."""
+    normal = normalised(character)
     out = []
     for k in range(count):
+        base = rerooted(normal) if reroot > 0 and k > 0 and rng.uniform() < reroot else normal
         c = base
         if k > 0:
             if base.clips is not None and len(base.clips) and k % 2 == 1:

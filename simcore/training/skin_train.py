@@ -39,23 +39,29 @@ class TrainConfig:
     log_every: int = 50
     seed: int = 0
     threads: int = 1  # per-sample ops are small: extra intra-op threads spin and wait when another process holds a core
+    device: str = "cpu"  # "cuda" trains on the GPU (samples are moved there once)
+    forward_samples: int = 1  # samples per forward pass (0: the whole batch); one at a time keeps a CPU's cache warm
     model: ModelConfig = field(default_factory=ModelConfig)
 
 
 Tensors = dict[str, torch.Tensor]
 
 
-def load_samples(folder: Path) -> tuple[list[Tensors], list[str]]:
-    """Every .npz sample in `folder` as tensors, with its category."""
+def sample_tensors(s: SkinSample, device: str = "cpu") -> Tensors:
+    """One sample's inputs and targets as tensors on `device`."""
+    i = s.inputs
+    arrays = {"pair": i.pair, "bone": i.bone, "point": i.point, "candidates": i.candidates, "prior": i.prior,
+              "target": s.target, "outside": s.outside, "moved": s.moved, "posed": s.posed}
+    return {k: torch.from_numpy(v).to(device) for k, v in arrays.items()}
+
+
+def load_samples(folder: Path, device: str = "cpu") -> tuple[list[Tensors], list[str]]:
+    """Every .npz sample in `folder` as tensors on `device`, with its category."""
     out, cats = [], []
     for path in sorted(folder.glob("*.npz")):
         with np.load(path, allow_pickle=False) as data:
             s = SkinSample.from_arrays(dict(data))
-        i = s.inputs
-        out.append({"pair": torch.from_numpy(i.pair), "bone": torch.from_numpy(i.bone), "point": torch.from_numpy(i.point),
-                    "candidates": torch.from_numpy(i.candidates), "prior": torch.from_numpy(i.prior),
-                    "target": torch.from_numpy(s.target), "outside": torch.from_numpy(s.outside),
-                    "moved": torch.from_numpy(s.moved), "posed": torch.from_numpy(s.posed)})
+        out.append(sample_tensors(s, device))
         cats.append(s.category)
     return out, cats
 
@@ -68,21 +74,49 @@ def _rows(sample: Tensors, rows: torch.Tensor | None) -> Tensors:
     return out
 
 
-def sample_losses(model: SkinAttention, s: Tensors) -> dict[str, torch.Tensor]:
-    """Mean L1, cross-entropy and deformation of one sample's rows."""
-    p = model(s["pair"], s["bone"], s["point"], s["candidates"], s["prior"])
-    l1 = ((p - s["target"]).abs().sum(dim=1) + s["outside"]).mean()
-    ce = -(s["target"] * torch.log(p + 1e-8)).sum(dim=1).mean()
-    skinned = (p[None, :, :, None] * s["moved"]).sum(dim=2)
-    deform = (skinned - s["posed"]).norm(dim=-1).mean()
-    return {"l1": l1, "ce": ce, "deform": deform}
+def _padded(tensors: list[torch.Tensor], width: int, dim: int = 1) -> torch.Tensor:
+    """Concatenate along the vertex axis after zero-padding the candidate axis `dim` to `width`."""
+    out = []
+    for t in tensors:
+        pad = [0, 0] * (t.dim() - dim - 1) + [0, width - t.shape[dim]]
+        out.append(torch.nn.functional.pad(t, pad))
+    return torch.cat(out, dim=dim - 1)
+
+
+def batch_losses(model: SkinAttention, samples: list[Tensors]) -> dict[str, torch.Tensor]:
+    """Mean over `samples` of each one's mean L1, cross-entropy and deformation, in one forward pass: bone sets
+    are padded and masked in the bone context, every sample's rows are read against the flat stack of bone
+    embeddings (candidates offset per sample, padded to the widest candidate list and masked out of the
+    softmax), so a step costs the same kernels for 1 or 32 samples."""
+    device = samples[0]["bone"].device
+    counts = torch.tensor([len(s["bone"]) for s in samples], device=device)
+    bone = torch.nn.utils.rnn.pad_sequence([s["bone"] for s in samples], batch_first=True)
+    padding = torch.arange(bone.shape[1], device=device)[None] >= counts[:, None]
+    bones = model.bone_context(model.bone_in(bone), src_key_padding_mask=padding)[~padding]  # (ΣJ, width)
+    offsets = torch.cumsum(counts, 0) - counts
+    width = max(s["candidates"].shape[1] for s in samples)
+    rows = torch.tensor([len(s["target"]) for s in samples], device=device)
+    candidates = _padded([s["candidates"] + o for s, o in zip(samples, offsets)], width)
+    valid = _padded([torch.ones_like(s["candidates"], dtype=torch.bool) for s in samples], width)
+    pair, prior, target = (_padded([s[k] for s in samples], width) for k in ("pair", "prior", "target"))
+    point, outside = (torch.cat([s[k] for s in samples]) for k in ("point", "outside"))
+    p = torch.softmax(model.logits(pair, bones, point, candidates, prior, valid), dim=-1)
+    moved = _padded([s["moved"] for s in samples], width, dim=2)
+    posed = torch.cat([s["posed"] for s in samples], dim=1)
+    per_row = {
+        "l1": (p - target).abs().sum(dim=1) + outside,
+        "ce": -(target * torch.log(p + 1e-8)).sum(dim=1),
+        "deform": ((p[None, :, :, None] * moved).sum(dim=2) - posed).norm(dim=-1).mean(dim=0),
+    }
+    owner = torch.repeat_interleave(torch.arange(len(samples), device=device), rows)
+    return {k: (torch.zeros(len(samples), device=device).index_add(0, owner, v) / rows).mean() for k, v in per_row.items()}
 
 
 def evaluate(model: SkinAttention, samples: list[Tensors]) -> dict[str, float]:
     """Mean L1 and deformation over whole samples (no gradient)."""
     model.eval()
     with torch.no_grad():
-        parts = [sample_losses(model, s) for s in samples]
+        parts = [batch_losses(model, [s]) for s in samples]
     model.train()
     return {k: round(float(np.mean([float(p[k]) for p in parts])), 5) for k in ("l1", "deform")}
 
@@ -92,14 +126,14 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
     torch.manual_seed(config.seed)
     torch.set_num_threads(config.threads)
     rng = np.random.default_rng(config.seed)
-    train, cats = load_samples(data / "train")
-    val, _ = load_samples(data / "val")
+    train, cats = load_samples(data / "train", config.device)
+    val, _ = load_samples(data / "val", config.device)
     if not train or not val:
         raise FileNotFoundError(f"no training or validation samples under {data}: run `rigforge train data` first")
     counts = {c: cats.count(c) for c in set(cats)}
     chance = np.array([1.0 / np.sqrt(counts[c]) for c in cats])
     chance /= chance.sum()
-    model = SkinAttention(config.model)
+    model = SkinAttention(config.model).to(config.device)
     opt = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=config.lr, total_steps=config.steps, pct_start=0.05)
     started = time.perf_counter()
@@ -107,31 +141,35 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
     best_state = {k: v.clone() for k, v in model.state_dict().items()}
     best_step = 0
     history = [{"step": 0, "val": best}]
-    running: dict[str, list[float]] = {"loss": [], "l1": [], "ce": [], "deform": []}
+    running: dict[str, list[torch.Tensor]] = {"loss": [], "l1": [], "ce": [], "deform": []}  # read at log time: no sync per step
     with log.open("w", encoding="utf-8") as fh:
         fh.write(json.dumps({"event": "start", "train_samples": len(train), "val_samples": len(val), "categories": counts,
                              "config": asdict(config), "val": best}) + "\n")
         for step in range(1, config.steps + 1):
-            loss = torch.zeros(())
+            picked = []
             for index in rng.choice(len(train), size=config.batch, p=chance):
                 s = train[index]
                 n = len(s["target"])
-                rows = torch.from_numpy(rng.choice(n, size=config.points, replace=False)) if n > config.points else None
-                parts = sample_losses(model, _rows(s, rows))
-                total = parts["l1"] + config.kl * parts["ce"] + config.deform * parts["deform"]
-                loss = loss + total / config.batch
+                rows = torch.from_numpy(rng.choice(n, size=config.points, replace=False)).to(config.device) if n > config.points else None
+                picked.append(_rows(s, rows))
+            group = config.forward_samples or len(picked)
+            loss = torch.zeros((), device=config.device)
+            for start in range(0, len(picked), group):
+                chunk = picked[start:start + group]
+                parts = batch_losses(model, chunk)
+                loss = loss + (parts["l1"] + config.kl * parts["ce"] + config.deform * parts["deform"]) * len(chunk) / len(picked)
                 for k in ("l1", "ce", "deform"):
-                    running[k].append(parts[k].item())
+                    running[k].append(parts[k].detach())
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
             opt.step()
             sched.step()
-            running["loss"].append(loss.item())
+            running["loss"].append(loss.detach())
             entry: dict = {}
             if step % config.log_every == 0:
                 entry = {"step": step, "seconds": round(time.perf_counter() - started, 1), "lr": sched.get_last_lr()[0],
-                         **{k: round(float(np.mean(v)), 5) for k, v in running.items()}}
+                         **{k: round(float(torch.stack(v).mean()), 5) for k, v in running.items()}}
                 running = {k: [] for k in running}
             if step % config.val_every == 0 or step == config.steps:
                 scores = evaluate(model, val)
@@ -145,6 +183,7 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
                 fh.flush()
                 report(step, config.steps, entry)
     model.load_state_dict(best_state)
+    model.cpu()
     summary = {"best_step": best_step, "val": best, "val_at_start": history[0]["val"], "seconds": round(time.perf_counter() - started, 1),
                "train_samples": len(train), "val_samples": len(val), "categories": counts, "config": asdict(config)}
     save_weights(model, out, summary)

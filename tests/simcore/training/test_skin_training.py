@@ -6,13 +6,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
+import torch
 
 from simcore.model_weights import ModelUnavailable
-from simcore.skinning.attention_model import ModelConfig
-from simcore.skinning.learned import learned_weights, load_model
+from simcore.skeleton.types import Skeleton
+from simcore.skinning.attention_model import ModelConfig, SkinAttention
+from simcore.skinning.learned import learned_weights, load_model, with_armature_root
 from simcore.training.sample_cache import save_sample
-from simcore.training.skin_samples import make_sample, variants
-from simcore.training.skin_train import TrainConfig, train_skin
+from simcore.training.skin_samples import Character, make_sample, normalised, rerooted, variants
+from simcore.training.skin_train import TrainConfig, batch_losses, sample_tensors, train_skin
 from tests.simcore.training.creatures import capsule_dog
 
 
@@ -41,3 +44,56 @@ def test_missing_or_corrupt_weights_raise_a_clear_error(tmp_path: Path, content:
     with pytest.raises(ModelUnavailable) as err:
         load_model(path)
     assert err.value.code == "model_unavailable" and str(path) in str(err.value)
+
+
+def _under_armature_root(c: Character, depth: int) -> Character:
+    """`c` hung from `depth` stacked unweighted roots below its own root (how many artist rigs look)."""
+    for _ in range(depth):
+        c = Character(c.name, c.category, c.vertices, c.faces, with_armature_root(c.vertices, c.skeleton),
+                      sp.hstack([sp.csr_matrix((len(c.vertices), 1)), c.weights]).tocsr())
+    return c
+
+
+@pytest.mark.parametrize("depth", [1, 2])
+def test_rerooted_takes_out_unweighted_armature_roots(depth: int) -> None:
+    dog = normalised(capsule_dog())
+    out = rerooted(normalised(_under_armature_root(capsule_dog(), depth)))
+    assert out.skeleton.names == dog.skeleton.names
+    np.testing.assert_array_equal(out.skeleton.parents, dog.skeleton.parents)
+    np.testing.assert_allclose(out.weights.toarray(), dog.weights.toarray())
+
+
+def test_rerooted_keeps_a_weighted_root() -> None:
+    dog = normalised(capsule_dog())
+    assert rerooted(dog) is dog
+
+
+def test_batched_losses_are_the_mean_of_per_sample_losses() -> None:
+    """Samples with different joint and candidate counts in one forward pass score as they do alone."""
+    rng = np.random.default_rng(1)
+    dog = capsule_dog()
+    small = Character("small", "other", dog.vertices, dog.faces, *_merged_legs(dog))
+    samples = [sample_tensors(make_sample(c, rng, 300)) for c in (dog, small)]
+    assert samples[0]["candidates"].shape[1] != samples[1]["candidates"].shape[1]
+    torch.manual_seed(0)
+    model = SkinAttention(ModelConfig(width=16, heads=2, bone_layers=1))
+    for p in model.out.parameters():  # a trained-looking head, not the zero start
+        torch.nn.init.normal_(p, std=0.3)
+    with torch.no_grad():
+        both = batch_losses(model, samples)
+        alone = [batch_losses(model, [s]) for s in samples]
+    for key in ("l1", "ce", "deform"):
+        assert float(both[key]) == pytest.approx(np.mean([float(a[key]) for a in alone]), rel=1e-5)
+
+
+def _merged_legs(c: Character) -> tuple[Skeleton, sp.csr_matrix]:
+    """The trunk joints only (every leg joint's weight moved to the trunk): fewer than 16 joints, so fewer candidates."""
+    keep = np.flatnonzero([not n.startswith(("leg", "foot", "paw")) for n in c.skeleton.names])
+    if len(keep) == c.skeleton.num_joints:
+        keep = np.arange(max(2, c.skeleton.num_joints // 2))
+    sub, kept = c.skeleton.without(~np.isin(np.arange(c.skeleton.num_joints), keep))
+    dense = c.weights.toarray()
+    merged = dense[:, kept].copy()
+    merged[:, 0] += dense.sum(axis=1) - merged.sum(axis=1)
+    return sub, sp.csr_matrix(merged)
+
