@@ -33,27 +33,29 @@ def render(report: MotionEvaluation, console: Console) -> None:
     table = Table(title="Own clips retargeted artist rig → rig, LBS vertex error in unit-cube units; edge stretch "
                         "(length / bind length) ours and the artist rig's on the same clip (the artist's deviation floored at "
                         "`floor`); enclosed volume / bind volume, lowest–highest frame; "
-                        "CMU 01_01 mocap foot sliding in heights/s")
+                        "CMU 01_01 mocap foot sliding in heights/s; our rig is the job's (default options) and `gate` its quality-gate "
+                        "warnings on that clip")
     for head in ("asset", "category", "rig", "clip", "frames", "joints", "mapped", "map"):
         table.add_column(head)
     for head in ("err mean", "err p95", "stretch p1", "stretch p99", "artist p1", "artist p99", "floor", "× artist",
                  "volume", "artist volume", "mocap slide", "contact", "s"):
         table.add_column(head, justify="right")
+    table.add_column("gate")
     for r in report.rows:
         cells = [r.name, r.category, r.target, r.clip, str(r.frames), str(r.joints), str(r.mapped), r.method]
         if r.error:
-            table.add_row(*cells, "error", *[""] * 11, _fmt(r.seconds, 1))
+            table.add_row(*cells, "error", *[""] * 11, _fmt(r.seconds, 1), "")
             continue
         ratio = _fmt(r.stretch_ratio, 2) + ("" if r.within_bound is not False else " ✗")
         table.add_row(*cells, _fmt(r.vertex_error, 4), _fmt(r.vertex_error_p95, 4), _fmt(r.stretch_low, 3),
                       _fmt(r.stretch_high, 3), _fmt(r.artist_stretch_low, 3), _fmt(r.artist_stretch_high, 3),
                       _fmt(r.deviation_floor, 3), ratio, _volume(r.volume_low, r.volume_high),
                       _volume(r.artist_volume_low, r.artist_volume_high), _fmt(r.mocap_sliding, 4), _fmt(r.mocap_contact, 3),
-                      _fmt(r.seconds, 1))
+                      _fmt(r.seconds, 1), ", ".join(r.warnings))
     for target in ("artist", "ours"):
         table.add_row("MEAN", "", target, "", "", "", "", "", _fmt(report.mean(target, "vertex_error"), 4),
                       _fmt(report.mean(target, "vertex_error_p95"), 4), *[""] * 8, _fmt(report.mean(target, "mocap_sliding"), 4),
-                      "", "", style="bold")
+                      "", "", "", style="bold")
     print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.target}: {r.error}" for r in report.rows if r.error))
     within, measured = report.bound_counts()
     console.print(f"our rig within {STRETCH_BOUND}× the artist's stretch on the same clip: {within} of {measured} clips")
@@ -67,7 +69,7 @@ def eval_motion(
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
 ) -> None:
-    """Retarget each character's own clip onto our predicted rig and compare with the artist's animation."""
+    """Play each character's own clips on the rig a job makes and compare with the artist's animation."""
     from simcore.evaluation.motion_eval import evaluate_motion
 
     console = Console()

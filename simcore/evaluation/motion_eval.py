@@ -3,11 +3,14 @@
 For every rigged .glb/.gltf in DIR that carries animation clips (loader stress tests excluded):
 - reference: the artist's animation, i.e. LBS of the world-space bind mesh with the artist's weights under
   the clip sampled on the artist's skeleton (bit-exact with a glTF viewer's skinning);
-- ours: the same clip retargeted from the artist's skeleton onto the predicted skeleton
-  (`predict_skeleton` + `compute_weights` on the bind mesh alone), skinned with our weights;
+- ours: exactly what a job does with the file and `options.motion.clip` naming the clip (`job_rig`, `job_clip`):
+  the job's ingest, skeleton and skin stages with default options, then its motion stage and the quality
+  gate's motion figures, on the ingested mesh (the gate in "warn" mode; its warnings are listed per row);
 - error: mean vertex distance per frame, in unit-cube units (divided by the rest mesh's largest extent),
   averaged over up to 60 evenly spaced frames; "artist" rows retarget onto the artist skeleton itself
-  (a self-check that must be ~0).
+  (a self-check that must be ~0). For our rig the job's mesh is compared with the artist's animation when the
+  ingested mesh is the bind mesh moved by one similarity (same vertices; residual under BIND_MATCH of its size);
+  when ingest re-posed or re-indexed it, the error is left out (the stretch figures need no correspondence).
 - stretch: over every frame of the clip, the lowest 1st and highest 99th percentile of edge length / bind
   length (as the quality gate measures a job), for our rig and for the artist's rig playing the same clip;
   `stretch_ratio` is our deviation from 1 over the artist's, the worse tail, and issue 25 bounds it by
@@ -22,17 +25,18 @@ contact, for our rig and (as a reference measured in the same run) the artist's 
 
 from __future__ import annotations
 
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from simcore.errors import SimcoreError
-from simcore.evaluation.assets import rigged_assets
+from simcore.evaluation.assets import asset_files, rigged_assets
 from simcore.gate.measures import deformation_series, lbs_blocks, model_size
 from simcore.geometry.laplacian import edges
 from simcore.io.bvh import parse_bvh
@@ -43,9 +47,12 @@ from simcore.motion.gltf_clips import bind_placement, read_gltf_clip
 from simcore.motion.quality import foot_sliding, skin_matrices
 from simcore.motion.retarget import retarget
 from simcore.motion.types import MotionClip
-from simcore.options import MotionOptions
+from simcore.options import JobOptions, MotionOptions
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.lbs import linear_blend
+
+if TYPE_CHECKING:
+    from simcore.pipeline import PipelineState
 
 EXCLUDED = {"recursive_skeletons"}  # a loader stress test of 84 skins, not a character
 MOCAP = "mocap_cmu_01_01.bvh"
@@ -53,6 +60,7 @@ MAX_FRAMES = 60
 STRETCH_BOUND = 1.15  # our stretch deviation / the artist rig's on the same clip, at most (issue 25)
 MIN_DEVIATION = 0.01  # an artist rig that stretches less than 1 % is compared with 1 %: no ratio of two near-zeros
 PIXEL = 1e-3  # × the model size: one pixel of a view framing the whole character 1000 pixels high
+BIND_MATCH = 1e-4  # × the model size: an ingested mesh this close to the bind mesh after a similarity is the same pose
 
 
 @dataclass
@@ -80,6 +88,7 @@ class MotionRow:
     artist_volume_low: float | None = None
     artist_volume_high: float | None = None
     deviation_floor: float = MIN_DEVIATION  # the least artist deviation a ratio divides by (see the module docstring)
+    warnings: list[str] = field(default_factory=list)  # the job's quality-gate warning codes for this clip (ours)
     seconds: float = 0.0
     error: str | None = None
 
@@ -103,7 +112,7 @@ class MotionRow:
 class MotionEvaluation:
     rows: list[MotionRow] = field(default_factory=list)
     skipped: dict[str, str] = field(default_factory=dict)
-    predictor: str = "predicted"
+    predictor: str = "the job's stages (default options)"
 
     def mean(self, target: str, key: str) -> float | None:
         vals = [getattr(r, key) for r in self.rows if r.target == target and getattr(r, key) is not None]
@@ -121,16 +130,6 @@ class MotionEvaluation:
             "skipped": self.skipped, "predictor": self.predictor,
             "mean": {t: {k: self.mean(t, k) for k in ("vertex_error", "vertex_error_p95", "mocap_sliding")} for t in ("ours", "artist")},
         }
-
-
-def _load_predictors() -> tuple[Callable, Callable] | None:
-    """(predict_skeleton, compute_weights) when those modules are importable, else None."""
-    try:
-        from simcore.skeleton.predict import predict_skeleton
-        from simcore.skinning.predict import compute_weights
-    except ImportError:
-        return None
-    return predict_skeleton, compute_weights
 
 
 def world_bind(doc: GltfDocument, asset: RiggedAsset, clip: MotionClip) -> tuple[np.ndarray, MotionClip]:
@@ -171,21 +170,31 @@ def _deformation(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix
     return float(series.stretch_low.min()), float(series.stretch_high.max()), low, high
 
 
-def _clip_error(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artist_w: sp.csr_matrix, target: Skeleton,
-                weights: sp.csr_matrix, row: MotionRow) -> Any:
-    """Fill the row's vertex error (mean, p95 per-vertex distance in unit-cube units) and stretch figures, ours and
-    the artist's; returns the retarget result."""
-    result = retarget(clip, target)
-    keep = _frames(clip.animation.num_frames)
-    artist_mats, our_mats = skin_matrices(clip.skeleton, clip.animation), skin_matrices(target, result.animation)
-    reference = linear_blend(vertices, artist_w, artist_mats[keep])
-    ours = linear_blend(vertices, weights, our_mats[keep])
-    dist = np.linalg.norm(ours - reference, axis=2) / np.ptp(vertices, axis=0).max()
+def _vertex_error(ours: np.ndarray, reference: np.ndarray, size: float, row: MotionRow) -> None:
+    """Fill the row's mean and p95 per-vertex distance (unit-cube units) of (T, V, 3) frames."""
+    dist = np.linalg.norm(ours - reference, axis=2) / size
     row.vertex_error, row.vertex_error_p95 = float(dist.mean()), float(np.percentile(dist, 95))
-    row.stretch_low, row.stretch_high, row.volume_low, row.volume_high = _deformation(vertices, faces, weights, our_mats)
+
+
+def _artist_figures(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artist_w: sp.csr_matrix, row: MotionRow) -> np.ndarray:
+    """Fill the artist rig's stretch, volume and floor figures; returns its (T, J, 4, 4) skinning matrices."""
+    mats = skin_matrices(clip.skeleton, clip.animation)
     row.artist_stretch_low, row.artist_stretch_high, row.artist_volume_low, row.artist_volume_high = _deformation(
-        vertices, faces, artist_w, artist_mats)
+        vertices, faces, artist_w, mats)
     row.deviation_floor = deviation_floor(vertices, faces)
+    return mats
+
+
+def _self_check(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artist_w: sp.csr_matrix, row: MotionRow) -> Any:
+    """The artist's clip retargeted onto its own skeleton and skinned with its own weights: every figure of the
+    row (a self-check of the retargeter); returns the retarget result."""
+    result = retarget(clip, clip.skeleton)
+    keep = _frames(clip.animation.num_frames)
+    artist_mats = _artist_figures(clip, vertices, faces, artist_w, row)
+    our_mats = skin_matrices(clip.skeleton, result.animation)
+    _vertex_error(linear_blend(vertices, artist_w, our_mats[keep]), linear_blend(vertices, artist_w, artist_mats[keep]),
+                  float(np.ptp(vertices, axis=0).max()), row)
+    row.stretch_low, row.stretch_high, row.volume_low, row.volume_high = _deformation(vertices, faces, artist_w, our_mats)
     return result
 
 
@@ -197,44 +206,104 @@ def _mocap_sliding(mocap: MotionClip | None, vertices: np.ndarray, target: Skele
     return score["sliding_heights_per_s"], score["contact_fraction"]
 
 
-def evaluate_character(name: str, category: str, doc: GltfDocument, asset: RiggedAsset,
-                       predictors: tuple[Callable, Callable] | None, mocap: MotionClip | None) -> list[MotionRow]:
-    """Rows for the artist rig (self-check) and for our predicted rig (when predictors exist), per clip."""
+def job_rig(path: Path, workdir: Path) -> PipelineState:
+    """The job's ingest, skeleton and skin stages on `path` with default options (quality gate in warn mode)."""
+    from simcore.pipeline import PipelineInputs, run_pipeline
+
+    options = JobOptions(stages=["skeleton", "skin"], quality_gate="warn")
+    return run_pipeline(PipelineInputs(path, path.suffix.lstrip(".").lower()), options, workdir)
+
+
+def job_clip(state: PipelineState, clip: int) -> tuple[dict[str, Any], list[str]]:
+    """The job's motion stage for the upload's own clip `clip` and the gate's motion check on its result:
+    (report["quality"]["motion"], the codes of the warnings it added)."""
+    from simcore.gate.checks import check_stage
+    from simcore.motion import stage as motion_stage
+    from simcore.pipeline import StageProgress
+
+    options = state.options
+    state.options = options.model_copy(update={"motion": options.motion.model_copy(update={"clip": clip}),
+                                               "stages": [*(options.stages or []), "motion"]})
+    before = len(state.report.get("warnings", []))
+    try:
+        motion_stage.run(state, StageProgress("motion", 0.0, 1.0, lambda stage, fraction: None, lambda: None))
+        check_stage("motion", state)
+    finally:
+        state.options = options
+    return state.report["quality"]["motion"], [w["code"] for w in state.report.get("warnings", [])[before:]]
+
+
+def _bind_frame(state: PipelineState, vertices: np.ndarray) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """(s, R, t) taking the job's mesh onto the bind mesh `vertices` when it is that mesh moved by one similarity."""
+    from simcore.geometry.similarity import similarity_fit
+
+    assert state.mesh is not None, "job_rig ingests"
+    mesh = state.mesh.vertices
+    if mesh.shape != vertices.shape:
+        return None
+    s, r, t = similarity_fit(mesh, vertices)
+    residual = np.linalg.norm(s * mesh @ r.T + t - vertices, axis=1).max()
+    return (s, r, t) if residual <= BIND_MATCH * model_size(vertices) else None
+
+
+def _job_rows(name: str, category: str, path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: sp.csr_matrix,
+              faces: np.ndarray, mocap: MotionClip | None, workdir: Path) -> list[MotionRow]:
+    """Our rig's rows: the job's rig playing each clip (see the module docstring)."""
+    started = time.perf_counter()
+    try:
+        state = job_rig(path, workdir)
+    except SimcoreError as exc:
+        return [MotionRow(name, category, "ours", error=f"{exc.code}: {exc}")]
+    assert state.mesh is not None and state.skeleton is not None and state.weights is not None, "the stages ran"
+    vertices = clips[0][0]
+    frame = _bind_frame(state, vertices)
+    rows = []
+    for k, (_, clip) in enumerate(clips):
+        row = MotionRow(name, category, "ours", clip.animation.name, clip.animation.num_frames, state.skeleton.num_joints)
+        try:
+            figures, row.warnings = job_clip(state, k)
+            assert state.animation is not None, "the motion stage ran"
+            row.mapped, row.method = len(state.report["motion"]["joint_map"]), state.report["motion"]["mapping_method"]
+            row.stretch_low, row.stretch_high = figures["stretch_low"], figures["stretch_high"]
+            row.volume_low, row.volume_high = figures.get("volume_low"), figures.get("volume_high")
+            artist_mats = _artist_figures(clip, vertices, faces, artist_w, row)
+            if frame is not None:
+                s, r, t = frame
+                keep = _frames(min(clip.animation.num_frames, state.animation.num_frames))
+                ours = linear_blend(state.mesh.vertices, state.weights, skin_matrices(state.skeleton, state.animation)[keep])
+                _vertex_error(s * ours @ r.T + t, linear_blend(vertices, artist_w, artist_mats[keep]),
+                              float(np.ptp(vertices, axis=0).max()), row)
+            if category == "humanoid" and k == 0:
+                row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, state.mesh.vertices, state.skeleton, state.weights)
+        except SimcoreError as exc:
+            row.error = f"{exc.code}: {exc}"
+        row.seconds = round(time.perf_counter() - started, 2)
+        started = time.perf_counter()
+        rows.append(row)
+    return rows
+
+
+def evaluate_character(name: str, category: str, path: Path, doc: GltfDocument, asset: RiggedAsset, use_predicted: bool,
+                       mocap: MotionClip | None, workdir: Path) -> list[MotionRow]:
+    """Rows for the artist rig (self-check) and, with `use_predicted`, for the job's rig, per clip."""
     clips = [world_bind(doc, asset, read_gltf_clip(doc, k, asset=asset)) for k in range(len(doc.items("animations")))]
     vertices = clips[0][0]
-    artist_w = asset.weights
-    humanoid = category == "humanoid"
-    targets: list[tuple[str, Callable[[], tuple[Skeleton, sp.csr_matrix]]]] = [
-        ("artist", lambda: (clips[0][1].skeleton, artist_w)),
-    ]
-    if predictors is not None:
-        predict_skeleton, compute_weights = predictors
-
-        def ours() -> tuple[Skeleton, sp.csr_matrix]:
-            skel = predict_skeleton(vertices, asset.faces).skeleton
-            return skel, compute_weights(vertices, asset.faces, skel, root_deforms=True).weights
-
-        targets.append(("ours", ours))
     rows = []
-    for label, build in targets:
-        started = time.perf_counter()
+    started = time.perf_counter()
+    for k, (_, clip) in enumerate(clips):
+        row = MotionRow(name, category, "artist", clip.animation.name, clip.animation.num_frames)
         try:
-            skel, weights = build()  # once per rig: every clip plays on it
+            result = _self_check(clip, vertices, asset.faces, asset.weights, row)
+            row.joints, row.mapped, row.method = clip.skeleton.num_joints, len(result.mapping), result.method
+            if category == "humanoid" and k == 0:
+                row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, vertices, clip.skeleton, asset.weights)
         except SimcoreError as exc:
-            rows.append(MotionRow(name, category, label, error=f"{exc.code}: {exc}"))
-            continue
-        for k, (_, clip) in enumerate(clips):
-            row = MotionRow(name, category, label, clip.animation.name, clip.animation.num_frames)
-            try:
-                result = _clip_error(clip, vertices, asset.faces, artist_w, skel, weights, row)
-                row.joints, row.mapped, row.method = skel.num_joints, len(result.mapping), result.method
-                if humanoid and k == 0:
-                    row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, vertices, skel, weights)
-            except SimcoreError as exc:
-                row.error = f"{exc.code}: {exc}"
-            row.seconds = round(time.perf_counter() - started, 2)
-            started = time.perf_counter()
-            rows.append(row)
+            row.error = f"{exc.code}: {exc}"
+        row.seconds = round(time.perf_counter() - started, 2)
+        started = time.perf_counter()
+        rows.append(row)
+    if use_predicted:
+        rows.extend(_job_rows(name, category, path, clips, asset.weights, asset.faces, mocap, workdir))
     return rows
 
 
@@ -244,17 +313,17 @@ def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[st
     DIR/MANIFEST.tsv lists for that split (the training corpus layout)."""
     directory = Path(directory)
     report = MotionEvaluation()
-    predictors = _load_predictors() if use_predicted else None
-    if use_predicted and predictors is None:
-        report.predictor = "unavailable (simcore.skeleton.predict / simcore.skinning.predict not importable)"
     mocap_path = directory / MOCAP
     mocap = parse_bvh(mocap_path.read_bytes(), name=mocap_path.stem) if mocap_path.is_file() else None
-    for name, category, doc, asset in rigged_assets(directory, report.skipped, split):
-        if name in EXCLUDED or (only and name not in only):
-            continue
-        if not doc.items("animations"):
-            report.skipped[name] = "no animation clips"
-            continue
-        on_asset(name)
-        report.rows.extend(evaluate_character(name, category, doc, asset, predictors, mocap))
+    paths = {p.stem: p for p in asset_files(directory, split)}
+    with tempfile.TemporaryDirectory(prefix="rigforge-motion-eval-") as work:
+        for name, category, doc, asset in rigged_assets(directory, report.skipped, split):
+            if name in EXCLUDED or (only and name not in only):
+                continue
+            if not doc.items("animations"):
+                report.skipped[name] = "no animation clips"
+                continue
+            on_asset(name)
+            report.rows.extend(evaluate_character(name, category, paths[name], doc, asset, use_predicted, mocap,
+                                                  Path(work) / name))
     return report

@@ -1,4 +1,5 @@
-"""Motion evaluation: the self-check onto the artist's own rig reproduces the artist's animation, every clip."""
+"""Motion evaluation: the self-check onto the artist's own rig reproduces the artist's animation, every clip, and
+our rig is the one a job makes."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import numpy as np
 import pytest
 
 from simcore.evaluation.motion_eval import MIN_DEVIATION, STRETCH_BOUND, MotionRow, deviation_floor, evaluate_motion
+from simcore.options import JobOptions, MotionOptions
+from simcore.pipeline import PipelineInputs, run_pipeline
 
 
 def test_artist_rig_self_check_is_exact_on_every_clip(dev_assets):
@@ -59,3 +62,17 @@ def test_a_split_evaluates_only_the_files_the_manifest_lists_for_it(dev_assets, 
                                            "rigged_simple\trigged/rigged_simple.glb\tother\ttrain\n")
     report = evaluate_motion(tmp_path, use_predicted=False, split="val")
     assert {r.name for r in report.rows} == {"simple_skin"} and report.rows[0].category == "other"
+
+
+def test_our_rows_are_what_a_job_playing_the_clip_measures(dev_assets, tmp_path):
+    """The eval's rig is the job's: same joints, and the job's own gate figures for the clip."""
+    report = evaluate_motion(dev_assets, only={"fox"})
+    walk = next(r for r in report.rows if r.target == "ours" and r.clip == "Walk")
+    path = dev_assets / "fox.glb"
+    options = JobOptions(stages=["skeleton", "skin", "motion"], quality_gate="warn", motion=MotionOptions(clip="Walk"))
+    state = run_pipeline(PipelineInputs(path, "glb"), options, tmp_path / "job")
+    assert state.skeleton is not None and walk.joints == state.skeleton.num_joints
+    figures = state.report["quality"]["motion"]
+    assert (walk.stretch_low, walk.stretch_high) == (figures["stretch_low"], figures["stretch_high"])
+    assert walk.warnings == [w["code"] for w in state.report.get("warnings", []) if w["stage"] == "motion"]
+    assert walk.vertex_error is not None and 0 < walk.vertex_error < 0.1  # the fox ingests at its bind pose: compared
