@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
-from simcore.geometry.similarity import similarity_fit
+from simcore.geometry.similarity import point_spread, similarity_fit
 from simcore.io.gltf_document import GltfDocument
 from simcore.skeleton.types import Skeleton, parents_first_order
 
@@ -179,10 +179,10 @@ def _similarity(source: np.ndarray, target: np.ndarray) -> np.ndarray | None:
     squares, `similarity_fit`); None for fewer than 4 points or a degenerate spread."""
     if len(source) < 4:
         return None
-    var = float(((source - source.mean(axis=0)) ** 2).sum()) / len(source)
+    var = point_spread(source)
     if not np.isfinite(var) or var <= 1e-18:
         return None
-    scale, rot, shift = similarity_fit(source, target)
+    scale, rot, shift = similarity_fit(source, target, var)
     if not np.isfinite(scale) or scale <= 0:
         return None
     out = np.eye(4)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from simcore.geometry.similarity import rigid_fit, rotation_from_covariance, similarity_fit
+from simcore.geometry.similarity import point_spread, rigid_fit, rotation_from_covariance, similarity_fit
 
 
 def test_rigid_fit_recovers_the_weighted_transform() -> None:
@@ -32,6 +32,16 @@ def test_similarity_fit_recovers_scale_rotation_and_shift() -> None:
     rot = Rotation.from_rotvec([-0.4, 0.2, 2.0]).as_matrix()
     scale, got_rot, shift = similarity_fit(source, 2.5 * source @ rot.T + [0.0, -3.0, 1.0])
     assert np.isclose(scale, 2.5) and np.allclose(got_rot, rot) and np.allclose(shift, [0.0, -3.0, 1.0])
+
+
+def test_similarity_fit_reuses_a_given_spread() -> None:
+    rng = np.random.default_rng(3)
+    source, target = rng.normal(size=(12, 3)), rng.normal(size=(12, 3))
+    spread = point_spread(source)
+    assert np.isclose(spread, np.var(source, axis=0).sum())
+    scale, rot, shift = similarity_fit(source, target, spread)
+    want_scale, want_rot, want_shift = similarity_fit(source, target)
+    assert scale == want_scale and np.array_equal(rot, want_rot) and np.array_equal(shift, want_shift)
 
 
 def test_mirrored_points_give_a_proper_rotation_batched() -> None:
