@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.skeleton.types import Skeleton, is_at_or_below
+from simcore.skeleton.types import Skeleton, is_at_or_below, tree_depths
 from simcore.skinning.bones import joint_distances, joint_segments
 
 SAMPLES = (0.25, 0.5, 0.75)  # points along each target bone compared with the source's bones
@@ -48,7 +48,8 @@ def fill_by_region(source: Skeleton, target: Skeleton, mapping: dict[int, int]) 
     module docstring) mapped to the candidate whose bones lie nearest its own. Both skeletons in one frame."""
     cost = _region_cost(source, target)
     out = dict(mapping)
-    order = sorted(range(target.num_joints), key=lambda j: _depth(target.parents, j))  # parents first
+    depth = tree_depths(target.parents)
+    order = sorted(range(target.num_joints), key=lambda j: depth[j])  # parents first
     for j in order:
         if j in out:
             continue
@@ -76,7 +77,8 @@ def region_mapping(source: Skeleton, target: Skeleton) -> dict[int, int]:
     cost = _region_cost(source, target)
     out = {j: int(np.argmin(cost[j])) for j in range(target.num_joints)}
     children = target.children()
-    for j in sorted(range(target.num_joints), key=lambda k: -_depth(target.parents, k)):  # children first
+    depth = tree_depths(target.parents)
+    for j in sorted(range(target.num_joints), key=lambda k: -depth[k]):  # children first
         candidates = branch_candidates(source.parents, [out[c] for c in children[j]])
         if not candidates or out[j] in candidates:
             continue
@@ -103,10 +105,3 @@ def branch_candidates(parents: np.ndarray, below: list[int]) -> list[int]:
         if all(is_at_or_below(parents, b, a) for b in down[1:]):
             return path[k:]
     return []
-
-
-def _depth(parents: np.ndarray, j: int) -> int:
-    d = 0
-    while parents[j] >= 0:
-        j, d = int(parents[j]), d + 1
-    return d

@@ -45,7 +45,7 @@ from simcore.motion.types import JointAnimation, MotionClip
 from simcore.options import MotionOptions
 from simcore.skeleton import kinematics
 from simcore.skeleton.mixamo import BODY_JOINTS
-from simcore.skeleton.types import Skeleton, is_at_or_below
+from simcore.skeleton.types import Skeleton, is_at_or_below, tree_depths
 
 MIN_BODY_SLOTS = 8  # shared Mixamo body slots needed to trust name matching over structure
 CONTACT_BAND = 0.05  # joints within this fraction of the height above the lowest one touch the floor
@@ -238,9 +238,7 @@ def _translating_root(source: Skeleton, anim: JointAnimation) -> int:
     moves |= np.ptp(anim.translations, axis=0).max(axis=1) > 1e-3 * size
     if not moves.any():
         return 0
-    depth = np.zeros(source.num_joints, np.int64)
-    for j in range(1, source.num_joints):
-        depth[j] = depth[source.parents[j]] + 1
+    depth = tree_depths(source.parents)
     subtree = np.array([_subtree(source.parents, j).sum() for j in range(source.num_joints)])
     candidates = np.flatnonzero(moves)
     return int(min(candidates, key=lambda j: (depth[j], -subtree[j])))
@@ -299,10 +297,7 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
         else:
             delta_t[:, j] = delta_t[:, p] if p >= 0 else np.eye(3)
 
-    depth = np.zeros(j_count, np.int64)
-    for j in range(1, j_count):
-        depth[j] = depth[parents[j]] + 1
-    motion_root = _motion_root(source, anim, mapping, depth)
+    motion_root = _motion_root(source, anim, mapping, tree_depths(parents))
     source_root = mapping[motion_root]
     moving = _subtree(parents, motion_root)
     contacts_t = _contacts(target.positions, np.flatnonzero(moving))

@@ -43,6 +43,17 @@ def parents_first_order(parents: np.ndarray) -> np.ndarray:
     return np.asarray(order, dtype=np.int64)
 
 
+def tree_depths(parents: np.ndarray) -> np.ndarray:
+    """(J,) int64 number of ancestors of each joint. parents: (J,) int, -1 for a root, in any order; raises
+    InvalidInput as `parents_first_order` does."""
+    parents = np.asarray(parents, dtype=np.int64).reshape(-1)
+    depth = np.zeros(len(parents), np.int64)
+    for j in parents_first_order(parents).tolist():
+        if parents[j] >= 0:
+            depth[j] = depth[parents[j]] + 1
+    return depth
+
+
 class JointKind(str, Enum):
     """What a joint belongs to; drives tokenisation (template parts, spring chains)."""
 

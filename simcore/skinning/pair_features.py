@@ -30,7 +30,7 @@ from scipy.sparse.csgraph import connected_components
 from simcore.geometry.laplacian import adjacency
 from simcore.geometry.weld import weld_vertices
 from simcore.metrics.skinning import unit_cube_frame
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import Skeleton, tree_depths
 from simcore.skinning.bones import closest_on_segments, joint_segments
 from simcore.skinning.geodesic import DISTANCE_UNIT, LEAF_EXTENSION, falloff_weights, geodesic_distances
 
@@ -52,15 +52,6 @@ class SkinInputs:
     bone: np.ndarray
     point: np.ndarray
     prior: np.ndarray
-
-
-def tree_depths(parents: np.ndarray) -> np.ndarray:
-    """(J,) int64 number of ancestors of each joint (parents listed before children)."""
-    depth = np.zeros(len(parents), np.int64)
-    for j, p in enumerate(parents):
-        if p >= 0:
-            depth[j] = depth[p] + 1
-    return depth
 
 
 def bone_features(skeleton: Skeleton, centre: np.ndarray, side: float) -> np.ndarray:
