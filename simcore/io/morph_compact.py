@@ -96,10 +96,11 @@ def compact_offsets(offsets: np.ndarray, tolerance: float, basis_vertex_bytes: f
 
     basis_vertex_bytes / residual_vertex_bytes: what the writer spends per vertex of a basis shape / of a kept
     residual; max_shapes: cap on basis shapes + keys with a residual (e.g. a viewer's morph-target limit).
+    Zero keys give the empty form: no basis shape, no residual, no error.
     """
     offsets = np.asarray(offsets, np.float64)
     k_count, v_count = offsets.shape[:2]
-    flat = offsets.reshape(k_count, -1)
+    flat = offsets.reshape(k_count, v_count * 3)  # not -1: zero keys leave that width undetermined
     u, s, vt = np.linalg.svd(flat, full_matrices=False)
     best: tuple[float, CompactMorphs] | None = None
     for rank in RANKS:

@@ -31,3 +31,10 @@ def test_quantized_basis_and_shape_cap_keep_the_tolerance():
     compact = compact_offsets(offsets, tol, 4.0, 5.0, basis_levels=127, max_shapes=len(offsets))
     assert compact.rank + sum(1 for r in compact.residual_rows if len(r)) <= len(offsets)
     assert _worst(compact, offsets) <= tol * (1 + 1e-5)
+
+
+def test_zero_keys_give_the_empty_form():
+    compact = compact_offsets(np.zeros((0, 300, 3)), 1e-4, 4.0, 5.0, basis_levels=127, max_shapes=8)
+    assert compact.rank == 0 and compact.basis.shape == (0, 300, 3) and compact.coefficients.shape == (0, 0)
+    assert compact.residual_rows == [] and compact.residual_values == [] and compact.residual_count() == 0
+    assert compact.max_error == 0.0 and compact.tolerance == 1e-4
