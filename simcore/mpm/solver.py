@@ -94,7 +94,7 @@ class MPMSolver:
 
     particle_mass: kg per particle; particle_volume: m³ per particle; sparse: update only active 4³ blocks
     (False runs the dense reference of the same kernels; None picks sparse on CPU and dense on CUDA, where
-    bench/mpm.py measured the dense pass faster: launch-bound, 0.16 vs 0.28 ms per substep at 20k/64³ on an H100);
+    bench/mpm.py measures the dense pass faster there: launch-bound; the README's bench table has the figures);
     gravity: m/s²; drive_gain: how strongly driver
     weight on a node replaces its velocity (weight × gain, capped at 1); bound: wall band in nodes;
     v_max: velocity clamp in m/s (None: 0.5 dx/dt per substep, the CFL limit).
