@@ -22,6 +22,8 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         f"- {data_config['variants']} variants of each corpus character: the bind pose, frames of its own clips and random poses "
         f"(±{data_config['pose_degrees']:g}°/√3 per axis) skinned with the artist weights, mid-edge subdivision on every other variant, "
         "a random turn about up and scale in [0.5, 2]",
+        *([f"- each variant after the first loses its unweighted armature root with chance {data_config['reroot']:g} (its heaviest "
+            "child becomes the root and takes its weight), so the model also sees roots that bend the mesh"] if data_config.get("reroot") else []),
         f"- {data_config['vertices']} random vertices kept per training sample, {data_config['val_vertices']} per val character",
         f"- samples: {summary['train_samples']} train, {summary['val_samples']} val; per category: {json.dumps(summary['categories'])}; "
         f"characters that failed to build: {data_summary.get('failed', 0)}",
