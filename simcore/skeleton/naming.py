@@ -19,7 +19,7 @@ import numpy as np
 from simcore.motion.joint_map import skeleton_slots
 from simcore.skeleton.body_plan import BodyPlan, body_plan, unique_names
 from simcore.skeleton.bone_maps import Preset, chain_names, slot_name
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import Skeleton, tree_depths
 
 HUMANOID_SLOTS = {"Hips", "Head", "LeftUpLeg", "RightUpLeg", "LeftLeg", "RightLeg", "LeftArm", "RightArm",
                   "LeftForeArm", "RightForeArm"}
@@ -42,13 +42,6 @@ class Naming:
 
     names: list[str]
     reading: str
-
-
-def _depth(parents: np.ndarray) -> np.ndarray:
-    depth = np.zeros(len(parents), np.int64)
-    for j, p in enumerate(parents):
-        depth[j] = depth[p] + 1 if p >= 0 else 0
-    return depth
 
 
 def _limb_joints(skeleton: Skeleton, path: list[int]) -> list[int]:
@@ -118,7 +111,7 @@ def joint_names(skeleton: Skeleton, preset: Preset) -> Naming:
         return Naming(body_plan(skeleton).names, "structure")
     slots, plan, how = reading
     names = [n if not PLACEHOLDER.match(n) else plan.names[j] for j, n in enumerate(skeleton.names)]
-    depth = _depth(skeleton.parents)
+    depth = tree_depths(skeleton.parents)
     for chain in ("spine", "neck"):
         members = sorted((j for j, s in enumerate(slots) if s == chain), key=lambda j: depth[j])
         for j, name in zip(members, chain_names(chain, len(members), preset)):
