@@ -4,9 +4,11 @@ Characters are often built of separate pieces (armour plates, robot segments, ey
 that artists bind rigidly to one bone: such a piece never needs to bend, and blending it between bones
 stretches it wherever the bones turn apart. A part is a connected component of the welded surface. In a mesh
 of several parts, every part whose weight mass lies at least RIGID_SHARE on one joint is bound to that joint
-alone. Parts that spread their weight wider (a body surface, a sleeve over an elbow) keep a blend, and so does
-a part larger than MAX_PIECE of the whole (a body, not a piece, whose blend the method chose for a reason); a mesh
-of one piece is left as it is.
+alone, and so is a part with no joint inside its bounding box, however its weight is spread: with no joint to
+bend about, a piece that blends between bones (an eye between head and neck) can only stretch. Parts that spread
+their weight wider and hold a joint (a body surface, a sleeve over an elbow) keep a blend, and so does a part
+larger than MAX_PIECE of the whole (a body, not a piece, whose blend the method chose for a reason); a mesh of
+one piece is left as it is.
 """
 
 from __future__ import annotations
@@ -18,21 +20,20 @@ RIGID_SHARE = 0.5  # a part with at least this share of its weight mass on one j
 MAX_PIECE = 0.35  # only parts whose box diagonal is at most this share of the whole mesh's are pieces
 
 
-def _part_sizes(vertices: np.ndarray, labels: np.ndarray, count: int) -> np.ndarray:
-    """(parts,) each part's bounding-box diagonal over the whole mesh's."""
+def _part_boxes(vertices: np.ndarray, labels: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """(parts, 3) lowest and highest corners of each part's bounding box."""
     lo = np.full((count, 3), np.inf)
     hi = np.full((count, 3), -np.inf)
     np.minimum.at(lo, labels, vertices)
     np.maximum.at(hi, labels, vertices)
-    whole = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
-    return np.linalg.norm(hi - lo, axis=1) / whole
+    return lo, hi
 
 
-def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_matrix, share: float = RIGID_SHARE,
-                     max_size: float = MAX_PIECE) -> sp.csr_matrix:
-    """(V, J) CSR `weights` with every part that puts at least `share` of its weight mass on one joint bound to
-    that joint alone (see the module docstring). vertices (V, 3): the mesh the weights are for; labels (V,) int:
-    its `part_labels`."""
+def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_matrix, joints: np.ndarray | None = None,
+                     share: float = RIGID_SHARE, max_size: float = MAX_PIECE) -> sp.csr_matrix:
+    """(V, J) CSR `weights` with every part that puts at least `share` of its weight mass on one joint, or that
+    holds none of `joints` (J, 3) in its box, bound to that joint alone (see the module docstring). vertices
+    (V, 3): the mesh the weights are for; labels (V,) int: its `part_labels`."""
     count = int(labels.max()) + 1 if len(labels) else 0
     if count < 2:
         return weights
@@ -41,7 +42,14 @@ def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_m
     mass = np.asarray((members @ w).todense())  # (parts, J)
     total = mass.sum(axis=1)
     top = mass.argmax(axis=1)
-    rigid = (total > 0) & (mass[np.arange(count), top] >= share * total) & (_part_sizes(vertices, labels, count) <= max_size)
+    lo, hi = _part_boxes(vertices, labels, count)
+    whole = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
+    leaning = mass[np.arange(count), top] >= share * total
+    if joints is not None and len(joints):
+        within = (np.asarray(joints)[None] >= lo[:, None]) & (np.asarray(joints)[None] <= hi[:, None])  # (parts, J, 3)
+        holds = np.any(np.all(within, axis=2), axis=1)
+        leaning |= ~holds
+    rigid = (total > 0) & leaning & (np.linalg.norm(hi - lo, axis=1) / whole <= max_size)
     rows = np.flatnonzero(rigid[labels])
     if not len(rows):
         return w

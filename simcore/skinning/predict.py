@@ -95,7 +95,7 @@ def compute_weights(
     """Skinning weights of a mesh for a skeleton in the same space.
 
     vertices: (V, 3) float, faces: (F, 3) int, skeleton: J joints. Every method's weights end with each separate
-    mesh part that leans mostly on one joint bound to that joint alone (parts.py).
+    mesh part that leans mostly on one joint, or holds no joint, bound to one joint alone (parts.py).
     `auto` takes the learned model, which scores better than the hand-written methods on the corpus's `val`
     split (its file carries those figures); when its weights cannot be read, `auto` runs geodesic and heat
     and keeps the lower unsupervised `score`. root_deforms: the skeleton was predicted, so its root is a body joint
@@ -157,9 +157,9 @@ def compute_weights(
             raise
     best = min(chosen, key=lambda name: scores[name]["score"])
     weights = transfer(results[best], v, mesh.vertices, max_influences) if on_proxy else results[best]
-    # separate pieces mostly on one joint follow it; the parts come from the weld above unless that was the proxy's
+    # separate pieces mostly on one joint, or holding none, follow one; the parts come from the weld above unless that was the proxy's
     labels = part_labels(mesh.vertices, mesh.faces) if on_proxy else welded_part_labels(welded, adj)
-    weights = bind_rigid_parts(mesh.vertices, labels, weights)
+    weights = bind_rigid_parts(mesh.vertices, labels, weights, skeleton.positions)
     return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
 
 

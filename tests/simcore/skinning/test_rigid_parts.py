@@ -50,3 +50,19 @@ def test_a_part_as_large_as_the_body_keeps_its_blend():
     assert np.allclose(out, dense)
     small = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), max_size=0.8).toarray()
     assert np.array_equal(small[:4], np.tile([1.0, 0.0, 0.0], (4, 1)))
+
+
+def test_a_spread_part_with_no_joint_inside_follows_its_main_joint():
+    """A piece blended between bones but holding none of their joints cannot bend about one: it is bound to the
+    joint it leans on most; the same piece around a joint keeps its blend."""
+    v, f = _two_parts()
+    dense = np.zeros((8, 3))
+    dense[:4] = [[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]]
+    dense[4:] = [[0.4, 0.3, 0.3], [0.2, 0.4, 0.4], [0.3, 0.3, 0.4], [0.4, 0.3, 0.3]]  # joint 2 has the most mass
+    outside = np.array([[0.2, 0.2, 0.2], [-1.0, 0.0, 0.0], [-2.0, 0.0, 0.0]])  # all three in or beyond the first part
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), outside, max_size=1.0).toarray()
+    assert np.array_equal(out[4:], np.tile([0.0, 0.0, 1.0], (4, 1)))
+    inside = outside.copy()
+    inside[2] = [3.2, 0.2, 0.2]  # a joint inside the second part's box
+    kept = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), inside, max_size=1.0).toarray()
+    assert np.allclose(kept[4:], dense[4:])
