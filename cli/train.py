@@ -23,17 +23,19 @@ CONFIGS = Path(__file__).resolve().parent.parent / "simcore" / "training" / "con
 DEFAULT_CONFIG = CONFIGS / "skin_cpu.json"
 SKELETON_CONFIG = CONFIGS / "skeleton_cpu.json"
 ConfigOption = Annotated[Path, typer.Option("--config", exists=True, dir_okay=False, help="JSON training config")]
+WorkersOption = Annotated[int, typer.Option(min=1, help="processes building characters at once (the samples are the same)")]
 
 
 def _read(config: Path) -> dict:
     return json.loads(config.read_text(encoding="utf-8"))
 
 
-def _build(config: Path, build: Callable[..., dict], data_config: Callable[..., object]) -> None:
-    """Run a sample builder on the config's "data" section into its "cache", with a progress bar."""
+def _build(config: Path, build: Callable[..., dict], data_config: Callable[..., object], workers: int) -> None:
+    """Run a sample builder on the config's "data" section into its "cache" on `workers` processes, with a progress bar."""
     spec = _read(config)
     with count_bar("samples") as update:
-        summary = build(data_config(**spec.get("data", {})), Path(spec["cache"]), lambda name, done, total: update(name, done, total))
+        summary = build(data_config(**spec.get("data", {})), Path(spec["cache"]), lambda name, done, total: update(name, done, total),
+                        workers)
     Console().print(f"train samples {summary['train']}, val samples {summary['val']}, failed characters {summary['failed']}")
     for name, why in summary["skipped"].items():
         Console().print(f"[yellow]skipped[/] {name}: {why}")
@@ -65,11 +67,11 @@ def _train(config: Path, data_command: str, train_command: str, model_config: Ca
 
 
 @app.command("data")
-def data(config: ConfigOption = DEFAULT_CONFIG) -> None:
+def data(config: ConfigOption = DEFAULT_CONFIG, workers: WorkersOption = 1) -> None:
     """Build (or complete) the sample cache: corpus train/val characters, augmented, and anny bodies."""
     from simcore.training.skin_dataset import DataConfig, build_skin_data  # torch and anny load only for training
 
-    _build(config, build_skin_data, DataConfig)
+    _build(config, build_skin_data, DataConfig, workers)
 
 
 @app.command("skin")
@@ -85,11 +87,11 @@ def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
 
 
 @app.command("skeleton-data")
-def skeleton_data(config: ConfigOption = SKELETON_CONFIG) -> None:
+def skeleton_data(config: ConfigOption = SKELETON_CONFIG, workers: WorkersOption = 1) -> None:
     """Build (or complete) the skeleton model's sample cache: points, class and tokens of each augmented character."""
     from simcore.training.skeleton_dataset import SkeletonDataConfig, build_skeleton_data
 
-    _build(config, build_skeleton_data, SkeletonDataConfig)
+    _build(config, build_skeleton_data, SkeletonDataConfig, workers)
 
 
 @app.command("skeleton")

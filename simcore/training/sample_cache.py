@@ -2,12 +2,15 @@
 
 Layout: out/data_config.json, out/train/<name>_<k>.npz, out/val/<name>_<k>.npz, out/summary.json (counts and the
 characters skipped with why). A character whose first sample exists is kept as it is (delete the folder to rebuild).
+With `workers` > 1 the characters are built by that many forked processes first; each job carries its own random
+generator, so the samples are the same as one process writes.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Iterable, Mapping
+import multiprocessing
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +18,8 @@ import numpy as np
 from simcore.errors import SimcoreError
 
 Job = tuple[str, str, Callable[[], Iterable[Mapping[str, np.ndarray]]]]  # (split, character name, make its samples)
+BUILD_ERRORS = (SimcoreError, ValueError, np.linalg.LinAlgError)  # one character failing this way is skipped
+_FORKED: tuple[Path, Sequence[Job]] | None = None  # what the forked builders read (closures cannot be pickled)
 
 
 def save_sample(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
@@ -25,18 +30,51 @@ def save_sample(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
     tmp.replace(path)
 
 
+def _save_all(out: Path, job: Job) -> None:
+    split, name, make = job
+    for k, arrays in enumerate(make()):
+        save_sample(out / split / f"{name}_{k:02d}.npz", arrays)
+
+
+def _build_forked(index: int) -> str:
+    assert _FORKED is not None, "set before the pool forks"
+    out, jobs = _FORKED
+    try:
+        _save_all(out, jobs[index])
+    except BUILD_ERRORS:
+        pass  # the sequential pass tries it again and records why it fails
+    return jobs[index][1]
+
+
+def _build_parallel(out: Path, jobs: Sequence[Job], workers: int, report: Callable[[str, int, int], None]) -> None:
+    """Build every job not cached yet on `workers` forked processes; report(name, done, total) as each ends."""
+    global _FORKED
+    missing = [i for i, (split, name, _) in enumerate(jobs) if not (out / split / f"{name}_00.npz").exists()]
+    _FORKED = (out, jobs)
+    try:
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            for done, name in enumerate(pool.imap_unordered(_build_forked, missing), start=len(jobs) - len(missing) + 1):
+                report(name, done, len(jobs))
+    finally:
+        _FORKED = None
+
+
 def fill_cache(out: Path, config: dict, jobs: Iterable[Job], total: int, skipped: dict[str, str],
-               report: Callable[[str, int, int], None]) -> dict:
-    """Run every job not cached yet; report(name, done, total) after each. Returns and writes the summary."""
+               report: Callable[[str, int, int], None], workers: int = 1) -> dict:
+    """Run every job not cached yet (on `workers` processes); report(name, done, total) after each. Returns and
+    writes the summary."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "data_config.json").write_text(json.dumps(config, indent=2))
+    if workers > 1:
+        jobs = list(jobs)
+        _build_parallel(out, jobs, workers, report)
+        report = lambda name, done, total: None  # noqa: E731 - the pass below only counts, and retries a failed character
     counts = {"train": 0, "val": 0, "failed": 0}
     for done, (split, name, make) in enumerate(jobs, start=1):
         if not (out / split / f"{name}_00.npz").exists():
             try:
-                for k, arrays in enumerate(make()):
-                    save_sample(out / split / f"{name}_{k:02d}.npz", arrays)
-            except (SimcoreError, ValueError, np.linalg.LinAlgError) as exc:  # one bad character is skipped
+                _save_all(out, (split, name, make))
+            except BUILD_ERRORS as exc:  # one bad character is skipped
                 skipped[name] = f"{type(exc).__name__}: {exc}"[:200]
                 counts["failed"] += 1
         counts[split] += len(list((out / split).glob(f"{name}_[0-9][0-9].npz")))

@@ -98,8 +98,10 @@ def make_skeleton_sample(character: Character, rng: np.random.Generator, points:
     return SkeletonSample(cloud, tokens, joints, character.category)
 
 
-def build_skeleton_data(config: SkeletonDataConfig, out: Path, report: Callable[[str, int, int], None]) -> dict:
-    """Write out/train/*.npz and out/val/*.npz; report(name, done, total) after each character. Returns counts."""
+def build_skeleton_data(config: SkeletonDataConfig, out: Path, report: Callable[[str, int, int], None],
+                        workers: int = 1) -> dict:
+    """Write out/train/*.npz and out/val/*.npz (on `workers` processes); report(name, done, total) after each
+    character. Returns counts."""
     tokenizer = SkeletonTokenizer(max_length=config.max_tokens)
     skipped: dict[str, str] = {}
 
@@ -113,4 +115,4 @@ def build_skeleton_data(config: SkeletonDataConfig, out: Path, report: Callable[
     jobs, total = character_jobs(Path(config.corpus), config.seed, config.anny_bodies, skipped,
                                  train=augmented(config.variants), val=lambda c, rng: samples([normalised(c)], rng),
                                  body=augmented(config.anny_variants))
-    return fill_cache(out, asdict(config), jobs, total, skipped, report)
+    return fill_cache(out, asdict(config), jobs, total, skipped, report, workers)

@@ -34,8 +34,10 @@ class DataConfig:
     seed: int = 0
 
 
-def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, int], None]) -> dict:
-    """Write out/train/*.npz and out/val/*.npz; report(name, done, total) after each character. Returns counts."""
+def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, int], None],
+                    workers: int = 1) -> dict:
+    """Write out/train/*.npz and out/val/*.npz (on `workers` processes); report(name, done, total) after each
+    character. Returns counts."""
     skipped: dict[str, str] = {}
 
     def posed(count: int) -> Make:
@@ -47,4 +49,4 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
     jobs, total = character_jobs(
         Path(config.corpus), config.seed, config.anny_bodies, skipped, train=posed(config.variants),
         val=lambda c, rng: [make_sample(normalised(c), rng, config.val_vertices).arrays()], body=posed(config.anny_variants))
-    return fill_cache(out, asdict(config), jobs, total, skipped, report)
+    return fill_cache(out, asdict(config), jobs, total, skipped, report, workers)
