@@ -34,8 +34,7 @@ def _build(config: Path, build: Callable[..., dict], data_config: Callable[..., 
     """Run a sample builder on the config's "data" section into its "cache" on `workers` processes, with a progress bar."""
     spec = _read(config)
     with count_bar("samples") as update:
-        summary = build(data_config(**spec.get("data", {})), Path(spec["cache"]), lambda name, done, total: update(name, done, total),
-                        workers)
+        summary = build(data_config(**spec.get("data", {})), Path(spec["cache"]), update, workers)
     Console().print(f"train samples {summary['train']}, val samples {summary['val']}, failed characters {summary['failed']}")
     for name, why in summary["skipped"].items():
         Console().print(f"[yellow]skipped[/] {name}: {why}")

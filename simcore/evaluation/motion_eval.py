@@ -176,21 +176,18 @@ def _vertex_error(ours: np.ndarray, reference: np.ndarray, size: float, row: Mot
     row.vertex_error, row.vertex_error_p95 = float(dist.mean()), float(np.percentile(dist, 95))
 
 
-def _artist_figures(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artist_w: sp.csr_matrix, row: MotionRow) -> np.ndarray:
-    """Fill the artist rig's stretch, volume and floor figures; returns its (T, J, 4, 4) skinning matrices."""
-    mats = skin_matrices(clip.skeleton, clip.animation)
-    row.artist_stretch_low, row.artist_stretch_high, row.artist_volume_low, row.artist_volume_high = _deformation(
-        vertices, faces, artist_w, mats)
-    row.deviation_floor = deviation_floor(vertices, faces)
-    return mats
+ARTIST_FIELDS = ("artist_stretch_low", "artist_stretch_high", "artist_volume_low", "artist_volume_high", "deviation_floor")
 
 
 def _self_check(clip: MotionClip, vertices: np.ndarray, faces: np.ndarray, artist_w: sp.csr_matrix, row: MotionRow) -> Any:
     """The artist's clip retargeted onto its own skeleton and skinned with its own weights: every figure of the
-    row (a self-check of the retargeter); returns the retarget result."""
+    row (a self-check of the retargeter), the artist rig's own stretch and volume among them; returns the
+    retarget result."""
+    artist_mats = skin_matrices(clip.skeleton, clip.animation)  # first: our rig's row needs these if retargeting fails
+    row.artist_stretch_low, row.artist_stretch_high, row.artist_volume_low, row.artist_volume_high = _deformation(
+        vertices, faces, artist_w, artist_mats)
     result = retarget(clip, clip.skeleton)
     keep = _frames(clip.animation.num_frames)
-    artist_mats = _artist_figures(clip, vertices, faces, artist_w, row)
     our_mats = skin_matrices(clip.skeleton, result.animation)
     _vertex_error(linear_blend(vertices, artist_w, our_mats[keep]), linear_blend(vertices, artist_w, artist_mats[keep]),
                   float(np.ptp(vertices, axis=0).max()), row)
@@ -246,9 +243,11 @@ def _bind_frame(state: PipelineState, vertices: np.ndarray) -> tuple[float, np.n
     return (s, r, t) if residual <= BIND_MATCH * model_size(vertices) else None
 
 
-def _job_rows(name: str, category: str, path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: sp.csr_matrix,
-              faces: np.ndarray, mocap: MotionClip | None, workdir: Path) -> list[MotionRow]:
-    """Our rig's rows: the job's rig playing each clip (see the module docstring)."""
+def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: sp.csr_matrix, artist_rows: list[MotionRow],
+              mocap: MotionClip | None, workdir: Path) -> list[MotionRow]:
+    """Our rig's rows: the job's rig playing each clip (see the module docstring), beside the artist rig's figures
+    that `artist_rows` (one per clip) already hold."""
+    name, category = artist_rows[0].name, artist_rows[0].category
     started = time.perf_counter()
     try:
         state = job_rig(path, workdir)
@@ -259,20 +258,20 @@ def _job_rows(name: str, category: str, path: Path, clips: list[tuple[np.ndarray
     frame = _bind_frame(state, vertices)
     rows = []
     for k, (_, clip) in enumerate(clips):
-        row = MotionRow(name, category, "ours", clip.animation.name, clip.animation.num_frames, state.skeleton.num_joints)
+        row = MotionRow(name, category, "ours", clip.animation.name, clip.animation.num_frames, state.skeleton.num_joints,
+                        **{f: getattr(artist_rows[k], f) for f in ARTIST_FIELDS})
         try:
             figures, row.warnings = job_clip(state, k)
             assert state.animation is not None, "the motion stage ran"
             row.mapped, row.method = len(state.report["motion"]["joint_map"]), state.report["motion"]["mapping_method"]
             row.stretch_low, row.stretch_high = figures["stretch_low"], figures["stretch_high"]
             row.volume_low, row.volume_high = figures.get("volume_low"), figures.get("volume_high")
-            artist_mats = _artist_figures(clip, vertices, faces, artist_w, row)
             if frame is not None:
                 s, r, t = frame
                 keep = _frames(min(clip.animation.num_frames, state.animation.num_frames))
                 ours = linear_blend(state.mesh.vertices, state.weights, skin_matrices(state.skeleton, state.animation)[keep])
-                _vertex_error(s * ours @ r.T + t, linear_blend(vertices, artist_w, artist_mats[keep]),
-                              float(np.ptp(vertices, axis=0).max()), row)
+                reference = linear_blend(vertices, artist_w, skin_matrices(clip.skeleton, clip.animation)[keep])
+                _vertex_error(s * ours @ r.T + t, reference, float(np.ptp(vertices, axis=0).max()), row)
             if category == "humanoid" and k == 0:
                 row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, state.mesh.vertices, state.skeleton, state.weights)
         except SimcoreError as exc:
@@ -288,10 +287,11 @@ def evaluate_character(name: str, category: str, path: Path, doc: GltfDocument, 
     """Rows for the artist rig (self-check) and, with `use_predicted`, for the job's rig, per clip."""
     clips = [world_bind(doc, asset, read_gltf_clip(doc, k, asset=asset)) for k in range(len(doc.items("animations")))]
     vertices = clips[0][0]
+    floor = deviation_floor(vertices, asset.faces)
     rows = []
     started = time.perf_counter()
     for k, (_, clip) in enumerate(clips):
-        row = MotionRow(name, category, "artist", clip.animation.name, clip.animation.num_frames)
+        row = MotionRow(name, category, "artist", clip.animation.name, clip.animation.num_frames, deviation_floor=floor)
         try:
             result = _self_check(clip, vertices, asset.faces, asset.weights, row)
             row.joints, row.mapped, row.method = clip.skeleton.num_joints, len(result.mapping), result.method
@@ -303,7 +303,7 @@ def evaluate_character(name: str, category: str, path: Path, doc: GltfDocument, 
         started = time.perf_counter()
         rows.append(row)
     if use_predicted:
-        rows.extend(_job_rows(name, category, path, clips, asset.weights, asset.faces, mocap, workdir))
+        rows.extend(_job_rows(path, clips, asset.weights, rows, mocap, workdir))
     return rows
 
 

@@ -33,15 +33,13 @@ def point_spread(points: np.ndarray) -> float:
     return float(((points - points.mean(0)) ** 2).sum() / len(points))
 
 
-def similarity_fit(source: np.ndarray, target: np.ndarray,
-                   spread: float | None = None) -> tuple[float, np.ndarray, np.ndarray]:
+def similarity_fit(source: np.ndarray, target: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     """(s, R (3, 3), t (3,)) minimising Σ|s R source_i + t - target_i|² (Umeyama); source, target (N, 3).
-    spread: the source's `point_spread` where the caller has it already. A source with no spread gives
-    scale 1."""
+    A source with no spread (`point_spread` 0) gives scale 1."""
     mu_s, mu_t = source.mean(0), target.mean(0)
     a, b = source - mu_s, target - mu_t
     cov = b.T @ a / len(a)
     rot = rotation_from_covariance(cov)
-    var = point_spread(source) if spread is None else spread
+    var = point_spread(source)
     scale = float(np.trace(rot.T @ cov) / var) if var > 0 else 1.0
     return scale, rot, mu_t - scale * rot @ mu_s

@@ -180,9 +180,9 @@ def _similarity(source: np.ndarray, target: np.ndarray) -> np.ndarray | None:
     if len(source) < 4:
         return None
     var = point_spread(source)
-    if not np.isfinite(var) or var <= 1e-18:
+    if not np.isfinite(var) or var <= 1e-18:  # checked before the fit: its SVD fails on NaN
         return None
-    scale, rot, shift = similarity_fit(source, target, var)
+    scale, rot, shift = similarity_fit(source, target)
     if not np.isfinite(scale) or scale <= 0:
         return None
     out = np.eye(4)

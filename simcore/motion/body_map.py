@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.skeleton.types import Skeleton, is_at_or_below, tree_depths
+from simcore.skeleton.types import Skeleton, ancestors, is_at_or_below, tree_depths
 from simcore.skinning.bones import joint_distances, joint_segments
 
 SAMPLES = (0.25, 0.5, 0.75)  # points along each target bone compared with the source's bones
@@ -97,10 +97,7 @@ def branch_candidates(parents: np.ndarray, below: list[int]) -> list[int]:
     down = sorted({b for b in below if not any(a != b and is_at_or_below(parents, a, b) for a in below)})
     if len(down) < 2:
         return []
-    path, a = [], down[0]
-    while a >= 0:
-        path.append(a)
-        a = int(parents[a])
+    path = ancestors(parents, down[0])
     for k, a in enumerate(path):
         if all(is_at_or_below(parents, b, a) for b in down[1:]):
             return path[k:]

@@ -12,7 +12,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.transform import Rotation
 
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import Skeleton, ancestors
 
 TURN_MARGIN = 0.8  # another facing must beat the unturned fit by this factor
 MAX_LEAF_DISTANCE = 0.35  # in bounding-box sizes: farther leaves are left unpaired
@@ -42,17 +42,9 @@ def quarter_turn(k: int) -> np.ndarray:
     return Rotation.from_rotvec([0.0, k * np.pi / 2, 0.0]).as_matrix()
 
 
-def _ancestors(parents: np.ndarray, j: int) -> list[int]:
-    """[j, parent(j), ..., root]."""
-    out = [j]
-    while parents[out[-1]] >= 0:
-        out.append(int(parents[out[-1]]))
-    return out
-
-
 def _lca(parents: np.ndarray, a: int, b: int) -> int:
-    up = set(_ancestors(parents, a))
-    return next(j for j in _ancestors(parents, b) if j in up)
+    up = set(ancestors(parents, a))
+    return next(j for j in ancestors(parents, b) if j in up)
 
 
 def _leaves(skeleton: Skeleton) -> np.ndarray:
@@ -102,8 +94,8 @@ def chain_mapping(source: Skeleton, target: Skeleton, turns: int | None = None) 
             mapping.setdefault(t_lca, s_lca)
     ps, pt = normalised_rest(source), normalised_rest(target)
     for t_leaf, s_leaf in pairs:  # interior joints between consecutive anchors of each chain
-        t_path = _ancestors(target.parents, t_leaf)[::-1]
-        s_path = _ancestors(source.parents, s_leaf)[::-1]
+        t_path = ancestors(target.parents, t_leaf)[::-1]
+        s_path = ancestors(source.parents, s_leaf)[::-1]
         s_pos = {j: k for k, j in enumerate(s_path)}
         anchors = [k for k, j in enumerate(t_path) if j in mapping and mapping[j] in s_pos]
         for a, b in zip(anchors[:-1], anchors[1:]):

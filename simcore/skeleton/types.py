@@ -10,6 +10,14 @@ import numpy as np
 from simcore.errors import InvalidInput
 
 
+def ancestors(parents: np.ndarray, j: int) -> list[int]:
+    """[j, parent(j), ..., its root]."""
+    out = [int(j)]
+    while parents[out[-1]] >= 0:
+        out.append(int(parents[out[-1]]))
+    return out
+
+
 def is_at_or_below(parents: np.ndarray, a: int, b: int) -> bool:
     """Joint a is joint b or one of b's descendants in the tree `parents` ((J,) int, -1 for a root)."""
     while a >= 0:

@@ -89,19 +89,17 @@ def rerooted(character: Character) -> Character:
     for j in range(len(parents) - 1, 0, -1):  # parents first: children's totals are complete before their parent's
         subtree[parents[j]] += subtree[j]
     top = int(kids[np.argmax(subtree[kids])])
-    keep = np.r_[top, [j for j in range(1, len(parents)) if j != top]]
-    index = np.full(len(parents), -1)
-    index[keep] = np.arange(len(keep))
-    adopted = np.where(parents == 0, top, parents)[keep]
-    new_parents = np.where(adopted >= 0, index[np.maximum(adopted, 0)], -1)
-    new_parents[0] = -1
+    adopted = np.where(parents == 0, top, parents)  # the root's children hang from `top`, the old root under it too
+    adopted[top], adopted[0] = -1, top
+    s = character.skeleton
+    order = np.r_[top, np.delete(np.arange(len(parents)), top)]  # `top` first, the rest as they were (parents first)
+    tree, kept = Skeleton(s.positions, adopted, s.names).reordered(order).without(order == 0)
     weights = sp.csr_matrix(character.weights, copy=True).tolil()
     weights[:, top] = weights[:, top] + weights[:, 0]
-    s = character.skeleton
-    skeleton = Skeleton(s.positions[keep], new_parents, [s.names[j] for j in keep])
-    clips = None if character.clips is None else character.clips[:, keep]
-    out = Character(character.name, character.category, character.vertices, character.faces, skeleton,
-                    sp.csr_matrix(weights.tocsr()[:, keep]), clips)
+    columns = order[kept]
+    clips = None if character.clips is None else character.clips[:, columns]
+    out = Character(character.name, character.category, character.vertices, character.faces, tree,
+                    sp.csr_matrix(weights.tocsr()[:, columns]), clips)
     return rerooted(out)  # the new root may be an unweighted control too
 
 

@@ -153,13 +153,14 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
                 rows = torch.from_numpy(rng.choice(n, size=config.points, replace=False)).to(config.device) if n > config.points else None
                 picked.append(_rows(s, rows))
             group = config.forward_samples or len(picked)
-            loss = torch.zeros((), device=config.device)
+            step_parts = {k: torch.zeros((), device=config.device) for k in ("l1", "ce", "deform")}
             for start in range(0, len(picked), group):
                 chunk = picked[start:start + group]
-                parts = batch_losses(model, chunk)
-                loss = loss + (parts["l1"] + config.kl * parts["ce"] + config.deform * parts["deform"]) * len(chunk) / len(picked)
-                for k in ("l1", "ce", "deform"):
-                    running[k].append(parts[k].detach())
+                for k, v in batch_losses(model, chunk).items():
+                    step_parts[k] = step_parts[k] + v * len(chunk) / len(picked)  # the batch mean, whatever the chunks
+            loss = step_parts["l1"] + config.kl * step_parts["ce"] + config.deform * step_parts["deform"]
+            for k, v in step_parts.items():
+                running[k].append(v.detach())
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
