@@ -16,16 +16,32 @@ def rotation_from_covariance(cov: np.ndarray) -> np.ndarray:
     return u @ vt
 
 
+def rigid_fits(source: np.ndarray, targets: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(T, L, 3, 3) rotations and (T, L, 3) translations: for every target frame (T, N, 3) and weight column
+    (N, L) ≥ 0, the R, t minimising Σ w_i |R source_i + t − target_i|², all in one batch. A column whose
+    weights sum to about 0 gives the identity."""
+    rot = np.tile(np.eye(3), (len(targets), weights.shape[1], 1, 1))
+    trans = np.zeros((len(targets), weights.shape[1], 3))
+    totals = weights.sum(0)
+    live = np.flatnonzero(totals >= MIN_WEIGHT)
+    if not len(live) or not len(targets):
+        return rot, trans
+    w, total = weights[:, live], totals[live, None]
+    mu_s = w.T @ source / total  # (L, 3)
+    frame_mean = targets.mean(1, keepdims=True)  # (T, 1, 3): centring first keeps the covariance exact
+    moved = targets - frame_mean
+    mu_t = np.einsum("vl,tvi->tli", w, moved, optimize=True) / total  # (T, L, 3)
+    weighted_source = w.T[:, :, None] * (source[None] - mu_s[:, None])  # (L, N, 3)
+    rot[:, live] = rotation_from_covariance(np.einsum("tvi,lvj->tlij", moved, weighted_source, optimize=True))
+    trans[:, live] = mu_t + frame_mean - np.einsum("tlij,lj->tli", rot[:, live], mu_s)
+    return rot, trans
+
+
 def rigid_fit(source: np.ndarray, target: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(R (3, 3), t (3,)) minimising Σ w_i |R source_i + t − target_i|²; weights (N,) ≥ 0. Identity when the
-    weights sum to about 0."""
-    total = float(weights.sum())
-    if total < MIN_WEIGHT:
-        return np.eye(3), np.zeros(3)
-    mu_s = weights @ source / total
-    mu_t = weights @ target / total
-    rot = rotation_from_covariance(((target - mu_t) * weights[:, None]).T @ (source - mu_s))
-    return rot, mu_t - rot @ mu_s
+    weights sum to about 0. One fit of `rigid_fits`."""
+    rot, trans = rigid_fits(source, target[None], weights[:, None])
+    return rot[0, 0], trans[0, 0]
 
 
 def point_spread(points: np.ndarray) -> float:

@@ -10,33 +10,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.geometry.similarity import MIN_WEIGHT, rotation_from_covariance
+from simcore.geometry.similarity import rigid_fits
 
 
 def joint_motions(targets: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(T, M, 3, 3) rotations and (T, M, 3) translations taking frame 0 to each frame, per joint.
 
     targets: (T, V, 3) vertex positions; weights: (V, M) coarse skinning weights (columns need not sum to 1).
-    Every frame and joint is one weighted Kabsch fit, all solved in one batch; a joint whose weights sum to
+    Every frame and joint is one weighted Kabsch fit (`rigid_fits`, one batch); a joint whose weights sum to
     about 0 keeps the identity.
     """
-    t_count, m_count = len(targets), weights.shape[1]
-    rot = np.tile(np.eye(3), (t_count, m_count, 1, 1))
-    trans = np.zeros((t_count, m_count, 3))
-    totals = weights.sum(0)
-    live = np.flatnonzero(totals >= MIN_WEIGHT)
-    if t_count < 2 or not len(live):
-        return rot, trans
-    w, total = weights[:, live], totals[live, None]
-    source = targets[0]
-    mu_s = w.T @ source / total  # (L, 3)
-    frame_mean = targets[1:].mean(1, keepdims=True)  # (T-1, 1, 3): centring first keeps the covariance exact
-    moved = targets[1:] - frame_mean
-    mu_t = np.einsum("vl,tvi->tli", w, moved, optimize=True) / total  # (T-1, L, 3)
-    weighted_source = w.T[:, :, None] * (source[None] - mu_s[:, None])  # (L, V, 3)
-    cov = np.einsum("tvi,lvj->tlij", moved, weighted_source, optimize=True)
-    rot[1:, live] = rotation_from_covariance(cov)
-    trans[1:, live] = mu_t + frame_mean - np.einsum("tlij,lj->tli", rot[1:, live], mu_s)
+    rot = np.tile(np.eye(3), (len(targets), weights.shape[1], 1, 1))
+    trans = np.zeros((len(targets), weights.shape[1], 3))
+    rot[1:], trans[1:] = rigid_fits(targets[0], targets[1:], weights)  # frame 0 is the identity exactly
     return rot, trans
 
 
