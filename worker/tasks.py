@@ -66,7 +66,12 @@ def _start_reconciler(sender: object = None, **_: object) -> None:
     global _reconciler, _maintenance
     from worker.embedded import ready_file
 
-    ready_file(get_settings(), os.getpid()).touch()  # tells a supervising `serve` this worker consumes
+    mark_ready = ready_file(get_settings(), os.getpid()).touch  # tells a supervising `serve` this worker consumes
+    hub = getattr(sender, "hub", None)
+    if hub is None:
+        mark_ready()
+    else:  # worker_ready fires before Celery checks its pool started: a pool process lost in between ends the worker,
+        hub.call_soon(mark_ready)  # so readiness is told from inside the event loop, which runs after that check
     _reconciler = Reconciler(get_settings())
     _reconciler.start()
     concurrency = int(getattr(getattr(sender, "controller", None), "concurrency", 1) or 1)
