@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from simcore.geometry.laplacian import edges
 from simcore.geometry.voxelize import solid_voxels
 from simcore.metrics.skinning import weight_stats
-from simcore.mpm.measures import signed_volumes
+from simcore.mpm.measures import part_volumes, volume_parts
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
 from simcore.skinning.lbs import linear_blend
@@ -65,18 +65,15 @@ class DeformationSeries:
     """Per-frame figures of a deforming mesh against its bind pose.
 
     stretch_low, stretch_high: (T,) the STRETCH_PERCENTILES over edges of deformed / bind edge length.
-    volume_ratio: (T,) enclosed volume / bind volume (rigid motion does not change it), or None when the
-                  bind mesh encloses no volume.
+    volume_ratio: (T,) enclosed volume / bind volume, or None when the bind mesh encloses no volume. The volume
+                  is the sum of the surface parts' own (mpm.measures.part_volumes): a closed part's enclosed volume,
+                  an open one's cones from its own centroid, so no part's rigid motion changes it (a character of
+                  open pieces, such as plates and joint covers, keeps its volume when the pieces move apart).
     """
 
     stretch_low: np.ndarray
     stretch_high: np.ndarray
     volume_ratio: np.ndarray | None
-
-
-def _centred_volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(T,) signed volumes about each frame's centroid: open game meshes then keep their volume under rigid motion."""
-    return signed_volumes(frames - frames.mean(axis=1, keepdims=True), faces)
 
 
 def deformation_series(rest: np.ndarray, faces: np.ndarray, blocks: Iterable[np.ndarray]) -> DeformationSeries:
@@ -86,7 +83,8 @@ def deformation_series(rest: np.ndarray, faces: np.ndarray, blocks: Iterable[np.
     rest_len = np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)
     keep = rest_len > MIN_EDGE * model_size(rest)
     e, rest_len = e[keep], rest_len[keep]
-    rest_volume = float(_centred_volumes(rest[None], faces)[0])
+    face_parts = volume_parts(rest, faces)
+    rest_volume = float(part_volumes(rest, faces, face_parts).sum())
     box = float(np.prod(np.ptp(rest, axis=0)))
     enclosed = abs(rest_volume) > MIN_ENCLOSED * box
     low, high, vol = [], [], []
@@ -97,7 +95,7 @@ def deformation_series(rest: np.ndarray, faces: np.ndarray, blocks: Iterable[np.
         low.append(p[0])
         high.append(p[1])
         if enclosed:
-            vol.append(_centred_volumes(frames, faces) / rest_volume)
+            vol.append(part_volumes(frames, faces, face_parts).sum(axis=1) / rest_volume)
     def cat(parts: list[np.ndarray]) -> np.ndarray:
         return np.concatenate(parts) if parts else np.zeros(0)
 

@@ -8,31 +8,20 @@ from scipy.spatial import cKDTree
 from simcore.geometry.parts import part_labels
 
 
-def signed_volumes(frames: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(T,) float64 enclosed volume per frame by the divergence theorem, m³.
-
-    frames: (T, V, 3) or (V, 3) float positions; faces: (F, 3) int. Exact for closed meshes; for open game
-    meshes it is a consistent proxy, so only ratios to the rest volume are reported.
-    """
-    f = np.asarray(frames, dtype=np.float64)
-    f = f[None] if f.ndim == 2 else f
-    a, b, c = (f[:, faces[:, k]] for k in range(3))
-    # a · (b × c) by components: np.cross on (T, F, 3) is ~10× slower (it moves the axis first)
-    triple = (a[..., 0] * (b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1])
-              + a[..., 1] * (b[..., 2] * c[..., 0] - b[..., 0] * c[..., 2])
-              + a[..., 2] * (b[..., 0] * c[..., 1] - b[..., 1] * c[..., 0]))
-    return triple.sum(axis=1) / 6.0
+def vertex_parts(vertices: np.ndarray, faces: np.ndarray, weld: float = 1e-6) -> np.ndarray:
+    """(V,) int64 part of each vertex: connected components of the surface with vertices closer than `weld` × the
+    mesh size merged first (seams that split vertices do not split a part)."""
+    v = np.asarray(vertices, np.float64)
+    size = float(np.ptp(v, axis=0).max()) if len(v) else 1.0
+    return part_labels(v, np.asarray(faces, np.int64).reshape(-1, 3), weld * (size or 1.0))
 
 
 def volume_parts(vertices: np.ndarray, faces: np.ndarray, weld: float = 1e-6) -> np.ndarray:
-    """(F,) int64 part of each face: connected components of the surface with vertices closer than `weld` × the
-    mesh size merged first (seams that split vertices do not split a part)."""
-    v = np.asarray(vertices, np.float64)
+    """(F,) int64 part of each face (`vertex_parts` of its first corner)."""
     faces = np.asarray(faces, np.int64)
     if len(faces) == 0:
         return np.zeros(0, np.int64)
-    size = float(np.ptp(v, axis=0).max()) or 1.0
-    return part_labels(v, faces, weld * size)[faces[:, 0]]
+    return vertex_parts(vertices, faces, weld)[faces[:, 0]]
 
 
 def part_volumes(frames: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) -> np.ndarray:

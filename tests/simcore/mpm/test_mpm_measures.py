@@ -4,7 +4,7 @@ import numpy as np
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from simcore.mpm.measures import part_volumes, signed_volumes, volume_change, volume_parts
+from simcore.mpm.measures import part_volumes, volume_change, volume_parts
 
 
 def _open_cup() -> tuple[np.ndarray, np.ndarray]:
@@ -30,7 +30,7 @@ def test_open_part_keeps_its_volume_under_rigid_motion():
     np.testing.assert_allclose(after, rest, rtol=1e-9)
     assert volume_change(np.stack([rest, after]), rest).max() < 1e-9
     # the origin-referenced sum is not a measure for an open surface: it changes under the same motion
-    before_o, after_o = signed_volumes(np.stack([v, moved]), f)
+    before_o, after_o = (trimesh.Trimesh(x, f, process=False).volume for x in (v, moved))
     assert abs(after_o / before_o - 1.0) > 0.05
 
 
