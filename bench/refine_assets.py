@@ -67,7 +67,8 @@ def _export_sizes(name: str, vertices: np.ndarray, skeleton: Any, weights: Any, 
     from simcore.io.usd_skel_writer import write_usd_skel
     from simcore.io.usd_validate import validate_usd_file
 
-    mesh = ingest((ASSETS / f"{name}.glb").read_bytes(), "glb")
+    path = next(p for p in sorted(ASSETS.glob(f"{name}.*")) if p.suffix in (".glb", ".gltf"))
+    mesh = ingest(path.read_bytes(), path.suffix.lstrip("."))
     if mesh.vertices.shape != vertices.shape or np.abs(mesh.vertices - vertices).max() > 1e-4 * np.ptp(vertices):
         return {"export": "skipped: the ingested mesh's vertices differ from the bench's"}
     glb = write_rigged_glb(mesh.glb, skeleton, weights, animation=animation, morph_frames=frames, morph_rate=rate,

@@ -12,13 +12,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.motion.types import JointAnimation
-from simcore.mpm.measures import part_volumes, volume_change, volume_parts
+from simcore.mpm.measures import part_volumes, vertex_parts, volume_change, volume_parts
 from simcore.mpm.sampling import nearest_rows
 from simcore.mpm.scene import CharacterScene, build_scene, particle_budget
 from simcore.options import RefineOptions
 from simcore.skeleton.kinematics import skinning_matrices
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.lbs import linear_blend
+from simcore.skinning.parts import rigid_piece_vertices
 
 PROBE_SUBSTEPS = 3  # timed substeps (after one untimed) behind the estimate
 VOLUME_BLOCK = 16  # frames per block of volume measurement
@@ -149,6 +150,8 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
         lbs_keys[start:start + VOLUME_BLOCK] = linear_blend(vertices, w, key_world[start:start + VOLUME_BLOCK] @ scene.inv_bind[None])
     offsets = sim - lbs_keys
     _fill_unsimulated(offsets, vertices, vp)
+    rigid = rigid_piece_vertices(vertex_parts(vertices, faces), w)
+    offsets[:, rigid] = 0.0  # a separate piece the rig binds to one joint alone stays rigid on it (a plate, a button)
     bad = ~np.isfinite(offsets)
     nan_replaced = int(bad.any(axis=2).sum())
     if nan_replaced:  # never hand a NaN to the exporters: no offset there (LBS) and say so
@@ -170,6 +173,7 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
         "ms_per_substep": round(1e3 * sim_s / max(substeps_run, 1), 3),
         "particle_substeps_per_s": round(s.count * substeps_run / max(sim_s, 1e-9)),
         "mean_abs_det_f_minus_1": [round(x, 6) for x in det_dev],
+        "rigid_piece_vertices": int(rigid.sum()),
         "clamped": {"velocity": clamps[0], "det_f": clamps[1], "tethered": tethered,
                     "non_finite_vertices_replaced_by_lbs": nan_replaced},
     })

@@ -60,3 +60,22 @@ def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_m
     out.eliminate_zeros()
     out.sort_indices()
     return out
+
+
+def rigid_piece_vertices(labels: np.ndarray, weights: sp.csr_matrix) -> np.ndarray:
+    """(V,) bool: the vertices of separate parts (labels (V,) int, `part_labels`; a mesh of several) that ride one
+    joint alone, every vertex of the part on the same joint with no other influence. Such a piece is rigid by the
+    rig's own account: nothing it is bound to can bend or squash it."""
+    count = int(labels.max()) + 1 if len(labels) else 0
+    if count < 2:
+        return np.zeros(len(labels), bool)
+    w = sp.csr_matrix(weights)
+    w.eliminate_zeros()
+    single = np.diff(w.indptr) == 1
+    joint = np.full(len(labels), -1, np.int64)
+    joint[single] = w.indices[w.indptr[:-1][single]]
+    lo = np.full(count, np.iinfo(np.int64).max)
+    hi = np.full(count, -1, np.int64)
+    np.minimum.at(lo, labels, np.where(single, joint, -1))  # a vertex with several influences puts -1 in its part
+    np.maximum.at(hi, labels, joint)
+    return ((lo == hi) & (lo >= 0))[labels]

@@ -124,3 +124,30 @@ def test_offsets_interpolate_between_keys():
     offsets = np.array([[[0.0, 0, 0]], [[1.0, 0, 0]]], np.float32)
     got = interpolate_offsets(offsets, np.array([0.0, 0.1]), np.array([0.0, 0.025, 0.1]))
     assert got[:, 0, 0].tolist() == pytest.approx([0.0, 0.25, 1.0])
+
+
+def test_a_separate_piece_on_one_joint_stays_rigid_on_it(capsule):
+    """A plate riding the tip joint alone keeps its LBS (rigid) motion while the bending capsule is simulated."""
+    import scipy.sparse as sp
+    import trimesh
+
+    from simcore.mpm.refine import refine_character
+
+    vertices, faces, skeleton, weights, animation = capsule(bend_degrees=90.0, frames=6)
+    plate = trimesh.creation.box(extents=[0.1, 0.02, 0.1])
+    plate_v = np.asarray(plate.vertices) + [0.0, 0.47, 0.0]
+    all_v = np.vstack([vertices, plate_v])
+    all_f = np.vstack([faces, np.asarray(plate.faces) + len(vertices)])
+    plate_w = np.zeros((len(plate_v), 3))
+    plate_w[:, 1] = 1.0
+    all_w = sp.vstack([weights, sp.csr_matrix(plate_w)]).tocsr()
+    opts = RefineOptions(enabled=True, grid=32, preroll_frames=1)
+    result = refine_character(all_v, all_f, skeleton, all_w, animation, opts)
+    from simcore.mpm.drivers import animation_world_transforms
+    from simcore.skeleton.kinematics import skinning_matrices
+    from simcore.skinning.lbs import linear_blend
+
+    lbs = linear_blend(all_v, all_w, skinning_matrices(skeleton, animation_world_transforms(skeleton, animation)))
+    assert result.report["rigid_piece_vertices"] == len(plate_v)
+    np.testing.assert_allclose(result.frames[:, len(vertices):], lbs[:, len(vertices):], atol=1e-5)
+    assert np.abs(result.frames[:, :len(vertices)] - lbs[:, :len(vertices)]).max() > 1e-3  # the body is simulated

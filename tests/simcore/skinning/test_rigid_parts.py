@@ -66,3 +66,18 @@ def test_a_spread_part_with_no_joint_inside_follows_its_main_joint():
     inside[2] = [3.2, 0.2, 0.2]  # a joint inside the second part's box
     kept = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), inside, max_size=1.0).toarray()
     assert np.allclose(kept[4:], dense[4:])
+
+
+def test_rigid_pieces_are_parts_on_one_joint_alone():
+    from simcore.skinning.parts import rigid_piece_vertices
+
+    v, f = _two_parts()
+    labels = part_labels(v, f)
+    dense = np.zeros((8, 3))
+    dense[:4, 1] = 1.0  # the first part rides joint 1 alone
+    dense[4:, 0], dense[4, 0], dense[4, 2] = 1.0, 0.6, 0.4  # the second blends at one vertex
+    assert rigid_piece_vertices(labels, sp.csr_matrix(dense)).tolist() == [True] * 4 + [False] * 4
+    dense[4, 0], dense[4, 2] = 0.0, 1.0  # every vertex single, but on two joints: not one rigid piece
+    assert not rigid_piece_vertices(labels, sp.csr_matrix(dense))[4:].any()
+    one = np.zeros(4, np.int64)  # a mesh of one part has no separate pieces
+    assert not rigid_piece_vertices(one, sp.csr_matrix(np.eye(3)[[1, 1, 1, 1]])).any()
