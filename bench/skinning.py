@@ -1,9 +1,9 @@
 """Skinning speed on a large generated creature: skin (each method) + rigged GLB and USD export, target ≤ 10 s;
 the learned method's own target is ≤ 3 s of skinning with its model already loaded (a worker loads it once).
 
-The creature: a 12-joint spine with six 8-joint limbs (60 joints) built as a soup of subdivided capsules
-(~50k vertices), ingested like an upload so vertex order is the exported file's. Prints a table and writes
-bench/results/skinning.json.
+The creature: a 12-joint spine with six 8-joint limbs (60 joints) built as a soup of capsules, one per bone,
+at the resolution that first reaches the asked vertex count (~50k), ingested like an upload so vertex order is
+the exported file's. Prints a table and writes bench/results/skinning.json.
 
   .venv/bin/python bench/skinning.py [--vertices 50000] [--methods learned geodesic heat auto]
 """
@@ -52,22 +52,25 @@ def creature(target_vertices: int) -> tuple[bytes, Skeleton]:
             prev = len(pos) - 1
     pos_a = np.asarray(pos)
     skeleton = Skeleton(pos_a, np.asarray(parents), [f"j{k:02d}" for k in range(len(pos))]).validate()
-    parts = []
-    for p, c in skeleton.bones():
-        a, b = pos_a[p], pos_a[c]
-        length = float(np.linalg.norm(b - a))
-        radius = 0.07 if c < 12 else 0.035
-        mesh = trimesh.creation.capsule(height=length, radius=radius, count=[16, 16])
-        mesh.apply_transform(trimesh.geometry.align_vectors([0.0, 0.0, 1.0], (b - a) / length))
-        mesh.apply_translation((a + b) / 2.0)
-        parts.append(mesh)
-    soup = trimesh.util.concatenate(parts)
-    assert isinstance(soup, trimesh.Trimesh)  # trimesh types it as any Geometry; capsules concatenate to a Trimesh
-    edge = 4.0 * np.sqrt(soup.area / (target_vertices * 2.0 * 0.433))  # triangles ≈ 2 × vertices, equilateral area
-    v, f = soup.vertices, soup.faces
-    while len(v) < target_vertices:  # subdivision halves edges, so step the size down until there are enough
-        v, f = trimesh.remesh.subdivide_to_size(soup.vertices, soup.faces, max_edge=edge)
-        edge *= 0.9
+
+    def soup(count: int) -> trimesh.Trimesh:
+        parts = []
+        for p, c in skeleton.bones():
+            a, b = pos_a[p], pos_a[c]
+            length = float(np.linalg.norm(b - a))
+            mesh = trimesh.creation.capsule(height=length, radius=0.07 if c < 12 else 0.035, count=[count, count])
+            mesh.apply_transform(trimesh.geometry.align_vectors([0.0, 0.0, 1.0], (b - a) / length))
+            mesh.apply_translation((a + b) / 2.0)
+            parts.append(mesh)
+        out = trimesh.util.concatenate(parts)
+        assert isinstance(out, trimesh.Trimesh)  # trimesh types it as any Geometry; capsules concatenate to a Trimesh
+        return out
+
+    # capsule resolution: the first whose soup reaches the asked vertex count (vertices grow as its square)
+    count = max(4, int(16 * np.sqrt(target_vertices / len(soup(16).vertices))) - 2)
+    while len((mesh := soup(count)).vertices) < target_vertices:
+        count += 1
+    v, f = mesh.vertices, mesh.faces
     glb = trimesh.Trimesh(v, f, process=False).export(file_type="glb")
     assert isinstance(glb, bytes)  # export() is typed for every format; GLB is bytes
     return glb, skeleton
