@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from simcore.errors import InvalidInput
 from simcore.motion.types import JointAnimation
 from simcore.mpm.measures import part_volumes, vertex_parts, volume_change, volume_parts
 from simcore.mpm.sampling import nearest_rows
@@ -44,6 +45,12 @@ def _fill_unsimulated(offsets: np.ndarray, vertices: np.ndarray, vertex_particle
         offsets[k, missing] = blend @ offsets[k, ~missing]
 
 
+def rigid_vertices(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix) -> np.ndarray:
+    """(V,) bool: vertices of separate pieces the weights bind to one joint alone (skinning.parts): the simulation
+    leaves them out and they follow that joint rigidly."""
+    return rigid_piece_vertices(vertex_parts(vertices, faces), sp.csr_matrix(weights))
+
+
 def interpolate_offsets(offsets: np.ndarray, key_times: np.ndarray, frame_times: np.ndarray) -> np.ndarray:
     """(T, V, 3) offsets at frame_times (s) by linear interpolation of key offsets (K, V, 3) at key_times (K,)."""
     f = np.interp(frame_times, key_times, np.arange(len(key_times)))
@@ -63,10 +70,12 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
                      progress: Callable[[float], None] = lambda f: None,
                      check_cancel: Callable[[], None] = lambda: None,
                      on_estimate: Callable[[dict[str, Any]], None] = lambda e: None,
-                     device: str | None = None, seed: int = 0) -> RefineResult:
+                     device: str | None = None, seed: int = 0, rigid: np.ndarray | None = None) -> RefineResult:
     """Simulate the character's volume driven by its animated skeleton.
 
     vertices: (V, 3) float bind pose, metres; faces: (F, 3) int; weights: (V, J) rows summing to 1.
+    rigid: (V,) bool `rigid_vertices` (computed when None): those pieces get no particles and no offset; some
+    face must have a vertex off them.
     Returns refined positions for every animation frame (frame 0 after `opts.preroll_frames` keys of easing in).
     on_estimate receives {"substeps", "ms_per_substep", "estimate_s"} before the simulation starts.
     """
@@ -80,7 +89,12 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
     dev = warp_device(device)
     budget, budget_source = particle_budget(opts.max_particles, dev)
     started = time.perf_counter()
-    scene = build_scene(vertices, faces, skeleton, sp.csr_matrix(weights), animation, opts, device=dev,
+    rigid = rigid_vertices(vertices, faces, weights) if rigid is None else rigid
+    soft = faces[~rigid[faces].all(axis=1)]  # the particle budget goes to what can deform
+    if not len(soft):
+        raise InvalidInput("every piece of the mesh rides one joint alone: nothing to simulate",
+                           code="refine_nothing_to_simulate", field="refine.enabled")
+    scene = build_scene(vertices, soft, skeleton, sp.csr_matrix(weights), animation, opts, device=dev,
                         max_particles=budget, seed=seed)
     s = scene.sample
     solver = MPMSolver(s.count, scene.grid, scene.dx, scene.density * s.particle_volume, s.particle_volume, device=dev,
@@ -150,7 +164,6 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
         lbs_keys[start:start + VOLUME_BLOCK] = linear_blend(vertices, w, key_world[start:start + VOLUME_BLOCK] @ scene.inv_bind[None])
     offsets = sim - lbs_keys
     _fill_unsimulated(offsets, vertices, vp)
-    rigid = rigid_piece_vertices(vertex_parts(vertices, faces), w)
     offsets[:, rigid] = 0.0  # a separate piece the rig binds to one joint alone stays rigid on it (a plate, a button)
     bad = ~np.isfinite(offsets)
     nan_replaced = int(bad.any(axis=2).sum())

@@ -26,14 +26,23 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     if state.mesh is None or state.skeleton is None or state.weights is None:
         raise InvalidInput("refinement needs the mesh, skeleton and skinning weights", code="refine_needs_rig",
                            field="refine.enabled")
-    from simcore.mpm.refine import refine_character
+    from simcore.mpm.refine import refine_character, rigid_vertices
+
+    rigid = rigid_vertices(state.mesh.vertices, state.mesh.faces, state.weights)
+    if rigid[state.mesh.faces].all(axis=1).all():
+        state.report["refine"] = {"skipped": "every piece of the mesh rides one joint alone: nothing can deform",
+                                  "rigid_piece_vertices": int(rigid.sum())}
+        state.warn("refine.enabled is set but every piece of the mesh is bound to one joint alone (nothing deforms); "
+                   "refinement skipped")
+        return
 
     def on_estimate(estimate: dict) -> None:
         # Written before the simulation starts, so a report read mid-run (or after a cancel) has it.
         state.report["refine"] = {"estimate": estimate}
 
     result = refine_character(state.mesh.vertices, state.mesh.faces, state.skeleton, state.weights, state.animation,
-                              opts, progress=progress, check_cancel=progress.check_cancel, on_estimate=on_estimate)
+                              opts, progress=progress, check_cancel=progress.check_cancel, on_estimate=on_estimate,
+                              rigid=rigid)
     state.refined_frames = result.frames
     state.report["refine"] = result.report
     for note in result.notes:

@@ -149,5 +149,27 @@ def test_a_separate_piece_on_one_joint_stays_rigid_on_it(capsule):
 
     lbs = linear_blend(all_v, all_w, skinning_matrices(skeleton, animation_world_transforms(skeleton, animation)))
     assert result.report["rigid_piece_vertices"] == len(plate_v)
+    plain = refine_character(vertices, faces, skeleton, weights, animation, opts)
+    assert result.report["particles"] == plain.report["particles"]  # the plate takes none of the particle budget
     np.testing.assert_allclose(result.frames[:, len(vertices):], lbs[:, len(vertices):], atol=1e-5)
     assert np.abs(result.frames[:, :len(vertices)] - lbs[:, :len(vertices)]).max() > 1e-3  # the body is simulated
+
+
+def test_refine_stage_skips_a_mesh_of_rigid_pieces_only(capsule, tmp_path):
+    """Every piece bound to one joint alone (a segmented robot): nothing can deform, so nothing is simulated."""
+    import scipy.sparse as sp
+
+    from simcore.mpm import refine_stage
+
+    vertices, faces, skeleton, _, animation = capsule(bend_degrees=60.0, frames=4)
+    two = np.vstack([vertices, vertices + [0.5, 0.0, 0.0]])
+    rows = np.zeros((len(two), 3))
+    rows[: len(vertices), 0] = rows[len(vertices):, 1] = 1.0
+    state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"),
+                          JobOptions(refine=RefineOptions(enabled=True, grid=32)), tmp_path)
+    state.mesh = IngestedMesh(two, np.vstack([faces, faces + len(vertices)]), b"")
+    state.skeleton, state.weights, state.animation = skeleton, sp.csr_matrix(rows), animation
+    refine_stage.run(state, StageProgress("refine", 0.0, 1.0, lambda name, f: None, lambda: None))
+    assert state.refined_frames is None
+    assert state.report["refine"]["rigid_piece_vertices"] == len(two)
+    assert any("nothing deforms" in w["message"] for w in state.report["warnings"])
