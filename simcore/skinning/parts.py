@@ -69,8 +69,8 @@ def rigid_piece_vertices(labels: np.ndarray, weights: sp.csr_matrix) -> np.ndarr
     count = int(labels.max()) + 1 if len(labels) else 0
     if count < 2:
         return np.zeros(len(labels), bool)
-    w = sp.csr_matrix(weights)
-    w.eliminate_zeros()
+    w = sp.csr_matrix(weights, copy=True)
+    w.eliminate_zeros()  # on a copy: the caller's matrix may share its arrays
     single = np.diff(w.indptr) == 1
     joint = np.full(len(labels), -1, np.int64)
     joint[single] = w.indices[w.indptr[:-1][single]]
