@@ -8,9 +8,13 @@ joint freely.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from simcore.geometry.similarity import rotation_from_covariance
+
+STEP_SHARES = np.array([1.0, 0.5, 0.25, 0.125, 0.0])  # of a joint's step, tried in turn to keep it inside the body
 
 
 def _procrustes(source: np.ndarray, target: np.ndarray, mass: np.ndarray) -> np.ndarray:
@@ -39,7 +43,8 @@ def _subtrees(parents: np.ndarray) -> list[np.ndarray]:
 def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarray, parents: np.ndarray,
                          joints: np.ndarray, floating: np.ndarray, start: np.ndarray, *, sweeps: int,
                          joint_regularisation: float, min_gain: float = 0.0,
-                         anchors: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+                         anchors: np.ndarray | None = None,
+                         inside: Callable[[np.ndarray], np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """(T, B, 4, 4) rigid transforms with each bone's joint carried by its parent in every frame, the re-fitted
     (B, 3) rest joints (the sweep, or the start, of least squared error over every frame and vertex), and the
     number of sweeps run.
@@ -50,6 +55,9 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
     joint_regularisation: per-frame pull of a joint towards its anchor (`anchors` (B, 3), default the given
     joints), which decides the directions the motion leaves open (along a hinge's axis) so joints do not drift.
     sweeps: at most this many; they stop after one that cuts the squared error by less than `min_gain` (a share).
+    inside: (N, 3) points → (N,) bool, the body's solid: a joint inside it takes at most the share of its step
+    (1, ½, ¼, ⅛ or none) that keeps it inside, so the fit cannot carry joints out of the body along the directions
+    the motion leaves loose; None lets joints go anywhere.
     """
     count, steps = weights.shape[1], frames.shape[0]
     joints = joints.copy()
@@ -97,6 +105,9 @@ def connected_transforms(rest: np.ndarray, frames: np.ndarray, weights: np.ndarr
                    + joint_regularisation * steps * np.eye(3))
             rhs = np.einsum("tki,tk->i", lever, pull[b]) + joint_regularisation * steps * (anchors[b] - joints[b])
             step = np.linalg.solve(lhs, rhs)
+            if inside is not None and inside(joints[b][None])[0]:
+                fits = np.append(inside(joints[b] + STEP_SHARES[:-1, None] * step), True)  # the last share is 0
+                step = STEP_SHARES[int(np.argmax(fits))] * step
             shift = lever @ step  # (T, 3)
             joints[b] += step
             shifts[b] = shift

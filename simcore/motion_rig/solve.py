@@ -166,8 +166,8 @@ def joints_inside(grid: VoxelGrid, tree: BoneTree, loose: float = 0.01) -> np.nd
 
 
 def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, free: BoneFit, tree: BoneTree,
-                  params: MotionRigParams, free_error: float,
-                  progress: Progress) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
+                  params: MotionRigParams, free_error: float, progress: Progress,
+                  grid: VoxelGrid | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
     """Weights (V, B), transforms (T, B, 4, 4) and rest joints (B, 3) of the tree fitted to `frames`, and the
     error after each round (first frame's bounding-box diagonals, over every frame and vertex).
 
@@ -176,7 +176,8 @@ def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, fre
     the weights take up what the joint constraints cost. It stops once the error reaches `free_error` (the
     unconstrained fit at this count), after `patience` rounds in a row that gain less than `round_gain`, after
     `params.rounds`, or once `params.total_sweeps` transform sweeps have run (a bound on its time); the best round
-    is kept (the weight solve's smoothing can cost a round some error).
+    is kept (the weight solve's smoothing can cost a round some error). With `grid` (the body's solid), a joint
+    inside it stays inside through the joint moves (connected_solve's `inside`).
     """
     diag = float(np.linalg.norm(np.ptp(frames[0], axis=0)))
 
@@ -190,7 +191,8 @@ def refit_on_tree(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray, fre
         out, moved, done = connected_transforms(rest, frames, w, tree.parents, j, tree.floating, m,
                                                 sweeps=min(params.sweeps, budget),
                                                 joint_regularisation=params.pivot_regularisation,
-                                                min_gain=params.sweep_gain, anchors=tree.joints)
+                                                min_gain=params.sweep_gain, anchors=tree.joints,
+                                                inside=None if grid is None else grid.inside)
         budget -= done
         return out, moved
 
@@ -239,7 +241,7 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     moved_in = np.any(inside != tree.joints, axis=1)  # joints outside the solid that could be moved in
     tree = replace(tree, joints=inside)
     weights, transforms, joints, refit = refit_on_tree(rest, frames, surface, bones, tree, params, free_total,
-                                                       lambda f: progress(0.6 + 0.35 * f))
+                                                       lambda f: progress(0.6 + 0.35 * f), grid)
     weights = weights / np.maximum(weights.sum(axis=1, keepdims=True), 1e-12)
     names = ["root"] + [f"bone_{i:02d}" for i in range(1, len(tree.order))]
     skeleton = Skeleton(joints, tree.parents, names).validate()

@@ -134,3 +134,23 @@ def test_count_search_goes_past_a_count_that_fits_worse(monkeypatch, stalled: fl
                                             lambda fraction: None)
     assert result.num_bones == chosen
     assert [t["asked"] for t in trail] == asked
+
+
+def test_a_joint_inside_the_body_stays_inside_when_the_fit_would_carry_it_out(tube):
+    """The tube's joints sit where its motion bends it; a 'body' that ends short of them keeps them within it."""
+    free = solve_from_clusters(tube.rest, tube.frames, tube.faces, 3, max_influences=4, iterations=5)
+    order = np.argsort(free.weights.T @ tube.rest[:, 0] / free.weights.sum(axis=0))
+    parents, floating = np.array([-1, 0, 1]), np.array([True, False, False])
+    start = np.array([[0.0, 0, 0], [0.2, 0, 0], [0.45, 0, 0]])  # short of where the bends are
+
+    def fit(inside):  # noqa: ANN001, ANN202
+        return connected_transforms(tube.rest, tube.frames, free.weights[:, order], parents, start, floating,
+                                    free.transforms[:, order], sweeps=6, joint_regularisation=1e-4, inside=inside)[1]
+
+    def body(points: np.ndarray) -> np.ndarray:
+        return points[:, 0] <= 0.5
+
+    free_joints = fit(None)
+    assert not body(free_joints[1:]).all()  # left alone, the fit moves a joint past x = 0.5
+    kept = fit(body)
+    assert body(kept[1:]).all()
