@@ -35,20 +35,29 @@ class RefineResult:
     notes: list[str] = field(default_factory=list)
 
 
-def _fill_unsimulated(offsets: np.ndarray, vertices: np.ndarray, vertex_particles: np.ndarray) -> None:
-    """Vertices thinned by the budget take the offsets (K, V, 3) of their nearest simulated vertices."""
-    missing = vertex_particles < 0
+def _fill_unsimulated(offsets: np.ndarray, vertices: np.ndarray, vertex_particles: np.ndarray, rigid: np.ndarray) -> None:
+    """Vertices thinned by the budget take the offsets (K, V, 3) of their nearest simulated vertices; those on
+    rigid pieces (`rigid` (V,) bool, never simulated) keep none."""
+    offsets[:, rigid] = 0.0
+    missing = (vertex_particles < 0) & ~rigid
     if not missing.any():
         return
-    blend = nearest_rows(vertices[~missing], sp.identity(int((~missing).sum()), format="csr"), vertices[missing])
+    simulated = vertex_particles >= 0
+    blend = nearest_rows(vertices[simulated], sp.identity(int(simulated.sum()), format="csr"), vertices[missing])
     for k in range(len(offsets)):
-        offsets[k, missing] = blend @ offsets[k, ~missing]
+        offsets[k, missing] = blend @ offsets[k, simulated]
 
 
 def rigid_vertices(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix) -> np.ndarray:
     """(V,) bool: vertices of separate pieces the weights bind to one joint alone (skinning.parts): the simulation
     leaves them out and they follow that joint rigidly."""
     return rigid_piece_vertices(vertex_parts(vertices, faces), sp.csr_matrix(weights))
+
+
+def soft_faces(faces: np.ndarray, rigid: np.ndarray) -> np.ndarray:
+    """The faces with a vertex off the rigid pieces (`rigid_vertices`): what the simulation samples; none means
+    nothing can deform."""
+    return faces[~rigid[faces].all(axis=1)]
 
 
 def interpolate_offsets(offsets: np.ndarray, key_times: np.ndarray, frame_times: np.ndarray) -> np.ndarray:
@@ -90,7 +99,7 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
     budget, budget_source = particle_budget(opts.max_particles, dev)
     started = time.perf_counter()
     rigid = rigid_vertices(vertices, faces, weights) if rigid is None else rigid
-    soft = faces[~rigid[faces].all(axis=1)]  # the particle budget goes to what can deform
+    soft = soft_faces(faces, rigid)  # the particle budget goes to what can deform
     if not len(soft):
         raise InvalidInput("every piece of the mesh rides one joint alone: nothing to simulate",
                            code="refine_nothing_to_simulate", field="refine.enabled")
@@ -163,8 +172,7 @@ def refine_character(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton
     for start in range(0, outputs, VOLUME_BLOCK):
         lbs_keys[start:start + VOLUME_BLOCK] = linear_blend(vertices, w, key_world[start:start + VOLUME_BLOCK] @ scene.inv_bind[None])
     offsets = sim - lbs_keys
-    _fill_unsimulated(offsets, vertices, vp)
-    offsets[:, rigid] = 0.0  # a separate piece the rig binds to one joint alone stays rigid on it (a plate, a button)
+    _fill_unsimulated(offsets, vertices, vp, rigid)  # a piece bound to one joint alone stays rigid on it (a plate)
     bad = ~np.isfinite(offsets)
     nan_replaced = int(bad.any(axis=2).sum())
     if nan_replaced:  # never hand a NaN to the exporters: no offset there (LBS) and say so

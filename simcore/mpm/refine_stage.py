@@ -26,10 +26,10 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     if state.mesh is None or state.skeleton is None or state.weights is None:
         raise InvalidInput("refinement needs the mesh, skeleton and skinning weights", code="refine_needs_rig",
                            field="refine.enabled")
-    from simcore.mpm.refine import refine_character, rigid_vertices
+    from simcore.mpm.refine import refine_character, rigid_vertices, soft_faces
 
     rigid = rigid_vertices(state.mesh.vertices, state.mesh.faces, state.weights)
-    if rigid[state.mesh.faces].all(axis=1).all():
+    if not len(soft_faces(state.mesh.faces, rigid)):
         state.report["refine"] = {"skipped": "every piece of the mesh rides one joint alone: nothing can deform",
                                   "rigid_piece_vertices": int(rigid.sum())}
         state.warn("refine.enabled is set but every piece of the mesh is bound to one joint alone (nothing deforms); "

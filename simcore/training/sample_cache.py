@@ -36,27 +36,37 @@ def _save_all(out: Path, job: Job) -> None:
         save_sample(out / split / f"{name}_{k:02d}.npz", arrays)
 
 
-def _build_forked(index: int) -> str:
+def _failure(exc: Exception) -> str:
+    return f"{type(exc).__name__}: {exc}"[:200]
+
+
+def _build_forked(index: int) -> tuple[str, str | None]:
+    """(character name, why it failed or None)."""
     assert _FORKED is not None, "set before the pool forks"
     out, jobs = _FORKED
     try:
         _save_all(out, jobs[index])
-    except BUILD_ERRORS:
-        pass  # the sequential pass tries it again and records why it fails
-    return jobs[index][1]
+    except BUILD_ERRORS as exc:
+        return jobs[index][1], _failure(exc)
+    return jobs[index][1], None
 
 
-def _build_parallel(out: Path, jobs: Sequence[Job], workers: int, report: Callable[[str, int, int], None]) -> None:
-    """Build every job not cached yet on `workers` forked processes; report(name, done, total) as each ends."""
+def _build_parallel(out: Path, jobs: Sequence[Job], workers: int, report: Callable[[str, int, int], None]) -> dict[str, str]:
+    """Build every job not cached yet on `workers` forked processes; report(name, done, total) as each ends.
+    Returns character name → why it failed, for those that did."""
     global _FORKED
     missing = [i for i, (split, name, _) in enumerate(jobs) if not (out / split / f"{name}_00.npz").exists()]
     _FORKED = (out, jobs)
+    failed: dict[str, str] = {}
     try:
         with multiprocessing.get_context("fork").Pool(workers) as pool:
-            for done, name in enumerate(pool.imap_unordered(_build_forked, missing), start=len(jobs) - len(missing) + 1):
+            for done, (name, why) in enumerate(pool.imap_unordered(_build_forked, missing), start=len(jobs) - len(missing) + 1):
+                if why is not None:
+                    failed[name] = why
                 report(name, done, len(jobs))
     finally:
         _FORKED = None
+    return failed
 
 
 def fill_cache(out: Path, config: dict, jobs: Iterable[Job], total: int, skipped: dict[str, str],
@@ -65,20 +75,23 @@ def fill_cache(out: Path, config: dict, jobs: Iterable[Job], total: int, skipped
     writes the summary."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "data_config.json").write_text(json.dumps(config, indent=2))
+    failed: dict[str, str] = {}
     if workers > 1:
         jobs = list(jobs)
-        _build_parallel(out, jobs, workers, report)
-        report = lambda name, done, total: None  # noqa: E731 - the pass below only counts, and retries a failed character
+        failed = _build_parallel(out, jobs, workers, report)
     counts = {"train": 0, "val": 0, "failed": 0}
     for done, (split, name, make) in enumerate(jobs, start=1):
-        if not (out / split / f"{name}_00.npz").exists():
+        if name not in failed and not (out / split / f"{name}_00.npz").exists():
             try:
                 _save_all(out, (split, name, make))
             except BUILD_ERRORS as exc:  # one bad character is skipped
-                skipped[name] = f"{type(exc).__name__}: {exc}"[:200]
-                counts["failed"] += 1
+                failed[name] = _failure(exc)
+        if name in failed:
+            skipped[name] = failed[name]
+            counts["failed"] += 1
         counts[split] += len(list((out / split).glob(f"{name}_[0-9][0-9].npz")))
-        report(name, done, total)
+        if workers == 1:  # the parallel builders already reported each character
+            report(name, done, total)
     summary = {**counts, "skipped": skipped}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return summary
