@@ -38,16 +38,3 @@ def test_a_forked_build_writes_what_one_process_writes(tmp_path: Path, workers: 
         with np.load(path) as a, np.load(tmp_path / "many" / path.relative_to(tmp_path / "one")) as b:
             assert np.array_equal(a["x"], b["x"])
 
-
-def test_a_character_that_fails_in_a_forked_builder_is_not_built_again(tmp_path: Path) -> None:
-    tries = tmp_path / "tries.txt"
-
-    def broken() -> list[Mapping[str, np.ndarray]]:
-        with tries.open("a") as f:  # the builder is another process: it leaves a mark in a file
-            f.write("try\n")
-        raise InvalidInput("no skin", field="mesh")
-
-    summary = fill_cache(tmp_path / "cache", {}, [*_jobs()[:2], ("train", "bad", broken)], 3, {},
-                         lambda name, done, total: None, workers=2)
-    assert summary["failed"] == 1 and "no skin" in summary["skipped"]["bad"]
-    assert tries.read_text().count("try") == 1
