@@ -27,9 +27,9 @@ import numpy as np
 from simcore.errors import InvalidInput
 from simcore.evaluation.assets import asset_files, problem, read_categories
 from simcore.evaluation.voxel_baseline import voxel_skeleton_graph
-from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, VoxelGrid, solid_voxels
 from simcore.io.gltf_rig import used_joints
-from simcore.metrics.skeleton import INSIDE_RESOLUTION, SkeletonScores, graph_scores, used_skeleton
+from simcore.metrics.skeleton import SkeletonScores, graph_scores, used_skeleton
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
 
@@ -154,7 +154,7 @@ def load_case(path: Path) -> EvalCase:
     if rig is None:
         raise InvalidInput(f"{path.name} has no skinned mesh", code="no_skin", field="mesh")
     gt = used_skeleton(rig.skeleton, used_joints(rig.skeleton, rig.weights))
-    grid = solid_voxels(mesh.vertices, mesh.faces, resolution=INSIDE_RESOLUTION)
+    grid = solid_voxels(mesh.vertices, mesh.faces, resolution=JOINT_TEST_RESOLUTION)
     return EvalCase(mesh, mesh_ground(mesh)[1], gt, grid)
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from simcore.geometry.laplacian import edges
-from simcore.geometry.voxelize import solid_voxels
+from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, solid_voxels
 from simcore.metrics.skinning import weight_stats
 from simcore.mpm.measures import part_volumes, volume_parts
 from simcore.skeleton.types import Skeleton
@@ -24,7 +24,6 @@ STRETCH_PERCENTILES = (1.0, 99.0)  # per frame, over edges: the shortest and lon
 MIN_ENCLOSED = 0.01  # × bounding-box volume: below this the mesh encloses no volume (a sheet) and none is measured
 MIN_EDGE = 1e-6  # × model size: shorter rest edges (coincident vertices) have no stretch ratio
 ZERO_BONE = 1e-4  # × model size: a bone shorter than this has no direction to rotate about
-INSIDE_RESOLUTION = 128  # voxels along the longest side for the joints-inside test (as the skeleton metrics)
 BLOCK_VALUES = 8_000_000  # frames × vertices posed at once (≈ 190 MB of float64 positions)
 
 
@@ -51,7 +50,7 @@ def skeleton_figures(skeleton: Skeleton, vertices: np.ndarray, faces: np.ndarray
 
     vertices (V, 3), faces (F, 3): the bind mesh, in the skeleton's frame.
     """
-    grid = solid_voxels(vertices, faces, resolution=INSIDE_RESOLUTION)
+    grid = solid_voxels(vertices, faces, resolution=JOINT_TEST_RESOLUTION)
     bones = skeleton.bones()
     length = np.linalg.norm(skeleton.positions[bones[:, 1]] - skeleton.positions[bones[:, 0]], axis=1) if len(bones) else np.zeros(0)
     return {

@@ -21,6 +21,8 @@ from simcore.errors import LimitExceeded
 
 PAD = 2  # empty voxels around the mesh so the outside is one connected region
 MAX_STEPS = 256  # lattice steps along a triangle's longest edge, at most
+JOINT_TEST_RESOLUTION = 128  # voxels along the longest side of the solid every joints-inside test uses
+# (quality gate, skeleton metrics, candidate score) and that rigs from motion move their joints into
 CHUNK_POINTS = 1 << 20  # lattice points made at once: bounds the voxeliser's working memory
 
 

@@ -22,13 +22,12 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from simcore.geometry.segments import segment_points
-from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, VoxelGrid, solid_voxels
 from simcore.io.gltf_rig import RiggedAsset, used_joints
 from simcore.skeleton.tokenizer import Normalization
 from simcore.skeleton.types import Skeleton
 
 BONE_STEP = 0.005  # unit-cube units between bone samples
-INSIDE_RESOLUTION = 128  # voxels along the longest side for the inside test
 
 
 @dataclass
@@ -109,14 +108,14 @@ def graph_scores(pred_joints: np.ndarray, pred_edges: np.ndarray, gt: Skeleton, 
     pred_joints: (N, 3) float64 and pred_edges: (E, 2) int64, in the mesh's frame (metres).
     gt: the ground-truth skeleton, already restricted to its used joints.
     vertices: (V, 3) float64, faces: (F, 3) int64 the ground-truth mesh (normalisation and inside test).
-    grid: a precomputed `solid_voxels(vertices, faces, INSIDE_RESOLUTION)` to share across methods.
+    grid: a precomputed `solid_voxels(vertices, faces, JOINT_TEST_RESOLUTION)` to share across methods.
     """
     norm = unit_cube(vertices)
     pred_joints = np.asarray(pred_joints, dtype=np.float64).reshape(-1, 3)
     pj, gj = norm.to_unit(pred_joints), norm.to_unit(gt.positions)
     pb, gb = bone_points(pj, pred_edges), bone_points(gj, gt.bones())
     if grid is None:
-        grid = solid_voxels(vertices, faces, resolution=INSIDE_RESOLUTION)
+        grid = solid_voxels(vertices, faces, resolution=JOINT_TEST_RESOLUTION)
     matched = np.unique(cKDTree(pj).query(gj)[1])  # each ground-truth joint's nearest predicted joint
     return SkeletonScores(
         j2j=chamfer(pj, gj),

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, VoxelGrid, solid_voxels
 from simcore.motion.types import JointAnimation
 from simcore.motion_rig.connected_solve import connected_transforms
 from simcore.motion_rig.free_bones import (
@@ -68,7 +68,8 @@ class MotionRigParams:
     total_sweeps: int = 200  # sweeps over all rounds (the time of the re-fit is about this many sweeps at most)
     rounds: int = 24  # at most this many weight → transform alternations on the tree
     weight_iterations: int = 3
-    inside_resolution: int = 64  # voxels along the longest side of the solid that joints are moved into
+    inside_resolution: int = JOINT_TEST_RESOLUTION  # voxels along the longest side of the solid joints move into
+    inside_reach: float = 2.0  # voxels: a joint the motion pins outside still moves to an inside voxel this near
     round_gain: float = 0.01  # alternations stop once `patience` rounds in a row cut the error by less than this
     patience: int = 2
     shape_reach: float | None = 1.0  # shape-skeleton joints this many local thicknesses from every motion joint
@@ -144,11 +145,12 @@ def choose_free_bones(rest: np.ndarray, frames: np.ndarray, surface: np.ndarray,
     return _free_fit(rest, frames, surface, chosen, params, params.iterations, start), trail
 
 
-def joints_inside(grid: VoxelGrid, tree: BoneTree, loose: float = 0.01) -> np.ndarray:
+def joints_inside(grid: VoxelGrid, tree: BoneTree, loose: float = 0.01, reach: float = 0.0) -> np.ndarray:
     """(B, 3) the tree's joints with those outside the solid moved in along the directions their motion leaves
     open (stiffness below `loose` × its largest: a hinge's axis, every direction of a pair that never bends):
     towards the bone's border with its parent, else towards the nearest inside voxel. A joint the motion pins
-    outside stays there (moving it would cost the fit)."""
+    outside moves to the nearest inside voxel centre only when that lies within `reach` voxels (as near as the
+    solid's own one-voxel surface is sure; the re-fit then takes up the small cost), and otherwise stays."""
     joints = tree.joints.copy()
     outside = np.flatnonzero(~grid.inside(joints))
     if not len(outside):
@@ -162,6 +164,9 @@ def joints_inside(grid: VoxelGrid, tree: BoneTree, loose: float = 0.01) -> np.nd
             if grid.inside(moved[None])[0]:
                 joints[i] = moved
                 break
+        else:
+            if np.linalg.norm(snapped[k] - joints[i]) <= reach * grid.pitch:
+                joints[i] = snapped[k]
     return joints
 
 
@@ -237,7 +242,7 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
                        pivot_regularisation=params.pivot_regularisation)
     tree = bone_tree(rest, bones.weights, pairs, params.slide_mismatch * diag)
     grid = solid_voxels(rest, faces, resolution=params.inside_resolution)
-    inside = joints_inside(grid, tree)
+    inside = joints_inside(grid, tree, reach=params.inside_reach)
     moved_in = np.any(inside != tree.joints, axis=1)  # joints outside the solid that could be moved in
     tree = replace(tree, joints=inside)
     weights, transforms, joints, refit = refit_on_tree(rest, frames, surface, bones, tree, params, free_total,

@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from simcore.geometry.voxelize import VoxelGrid, solid_voxels
+from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, VoxelGrid, solid_voxels
 from simcore.metrics.skeleton import bone_points
 from simcore.skeleton.medial import medial_voxels
 from simcore.skeleton.mirror import MirrorPlane
@@ -32,7 +32,6 @@ from simcore.skeleton.types import Skeleton
 WEIGHTS = {"inside": 1.0, "medial_gap": -1.0, "off_medial": -5.0, "asymmetry": -5.0, "stacked": -1.0}
 LOG_PROB_WEIGHT = 0.1
 SHORT_BONE = 0.01
-SOLID_RESOLUTION = 128  # voxels along the longest side of the solid the inside and medial terms use
 
 
 @dataclass(frozen=True)
@@ -48,7 +47,7 @@ class ShapeContext:
 
 def shape_context(vertices: np.ndarray, faces: np.ndarray) -> ShapeContext:
     """The ShapeContext of a mesh (vertices (V, 3) metres, faces (F, 3)); deterministic."""
-    grid = solid_voxels(vertices, faces, resolution=SOLID_RESOLUTION)
+    grid = solid_voxels(vertices, faces, resolution=JOINT_TEST_RESOLUTION)
     ijk = medial_voxels(grid)[0]
     medial = grid.centers(ijk) if len(ijk) else np.asarray(vertices, dtype=np.float64)
     return ShapeContext(grid, cKDTree(medial), body_mirror(vertices), float(np.ptp(vertices, axis=0).max()))

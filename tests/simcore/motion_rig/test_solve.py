@@ -114,6 +114,25 @@ def test_joints_outside_the_solid_are_moved_inside(tube):
     assert np.allclose(held[1:], joints[1:])
 
 
+def test_a_pinned_joint_just_outside_moves_in_within_reach(tube):
+    from simcore.geometry.voxelize import solid_voxels
+    from simcore.motion_rig.hierarchy import BoneTree
+    from simcore.motion_rig.solve import joints_inside
+
+    grid = solid_voxels(tube.rest, tube.faces, resolution=32)
+    inside = grid.centers(np.argwhere(grid.occupancy))
+    top = inside[np.argmax(inside[:, 2])]
+    near, far = top + [0.0, 0.0, 1.5 * grid.pitch], top + [0.0, 0.0, 6.0 * grid.pitch]
+    joints = np.stack([tube.rest.mean(axis=0), near, far])
+    tree = BoneTree(np.arange(3), np.array([-1, 0, 1]), joints, np.array([True, False, False]),
+                    np.zeros(3, bool), joints.copy(), np.tile(np.eye(3), (3, 1, 1)))  # every joint pinned
+    assert not grid.inside(joints[1:]).any()
+    assert np.allclose(joints_inside(grid, tree), joints)  # no reach: pinned joints stay
+    moved = joints_inside(grid, tree, reach=2.0)
+    assert grid.inside(moved[1:2]).all() and np.linalg.norm(moved[1] - near) <= 2.0 * grid.pitch
+    assert np.allclose(moved[2], far)  # beyond the reach: stays
+
+
 @pytest.mark.parametrize(("stalled", "chosen", "asked"), [(0.009, 8, [2, 4, 8]), (0.007, 2, [2, 4])])
 def test_count_search_goes_past_a_count_that_fits_worse(monkeypatch, stalled: float, chosen: int, asked: list[int]):
     """Scripted search errors: 2 bones 0.008 (usable), 4 bones `stalled`, 8 bones 0.0004 (on target). A count
