@@ -358,9 +358,12 @@ class PhysicsFit:
     def velocity_phase(self, iters: int, lr: float, progress: Callable[[float], None] = lambda f: None,
                        first: int = 0) -> float:
         """SGD on the driving controls frame by frame from frame interval `first` (earlier ones stay fixed);
-        returns the summed loss of the fitted intervals."""
+        returns the summed loss of the fitted intervals. Each step looks at its own frame only, so fitting early
+        frames can cost the later ones more than it gains (the particles' velocities carry on); a phase that ends
+        worse than it started is undone, as the material phase keeps its best point."""
         frames = len(self.controls)
-        self.forward()  # checkpoints for every frame start
+        xs = self.forward()  # checkpoints for every frame start
+        start = (sum(self._frame_loss(xs[f], f + 1)[0] for f in range(first, frames)), self.controls.copy())
         total = 0.0
         for f in range(first, frames):
             loss = 0.0
@@ -376,6 +379,10 @@ class PhysicsFit:
             x = self.forward(f, f)[0]  # refresh the next frame's checkpoint
             total += self._frame_loss(x, f + 1)[0]
             progress((f + 1) / frames)
+        if total > start[0]:
+            self.controls = start[1]
+            self.forward()
+            total = start[0]
         return total
 
 
