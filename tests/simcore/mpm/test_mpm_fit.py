@@ -35,7 +35,6 @@ def test_velocity_fit_reduces_the_chamfer_loss(drive):
     assert fit.controls[0, :, 1].mean() > (0.3 * 0.6 if drive == "velocity" else 0.0)
 
 
-
 def test_a_velocity_phase_never_ends_worse_than_it_started():
     """A learning rate far too large for the grid: the phase is undone rather than left worse."""
     config = FitConfig(prototypes=2, grid=24, substeps=10, max_particles=800)
@@ -50,6 +49,7 @@ def test_a_velocity_phase_never_ends_worse_than_it_started():
     after = fit.velocity_phase(3, 50.0)
     assert after <= before * (1 + 1e-9)
     assert np.isfinite(fit.controls).all()
+
 
 def test_anchored_drive_does_not_accumulate_a_velocity_error():
     """Driving points aimed at per-frame anchors stay within a cell of them; integrated velocities with a bias

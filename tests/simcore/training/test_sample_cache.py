@@ -37,4 +37,3 @@ def test_a_forked_build_writes_what_one_process_writes(tmp_path: Path, workers: 
     for path in sorted((tmp_path / "one").rglob("*.npz")):
         with np.load(path) as a, np.load(tmp_path / "many" / path.relative_to(tmp_path / "one")) as b:
             assert np.array_equal(a["x"], b["x"])
-
