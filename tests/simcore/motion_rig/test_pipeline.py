@@ -38,3 +38,14 @@ def test_a_one_frame_sequence_fails_with_a_clear_code(tmp_path):
     with pytest.raises(InvalidInput) as err:
         run_pipeline(PipelineInputs(upload, "zip"), JobOptions(skeleton="from_motion"), tmp_path / "out")
     assert err.value.code == "sequence_too_short" and err.value.field == "mesh"
+
+
+@pytest.mark.parametrize(("asked", "bones"), [({}, None), ({"max_joints": 64}, None), ({"max_joints": 4}, 4)])
+def test_the_bone_count_survives_the_options_round_trip_a_job_makes(asked: dict, bones: int | None):
+    """A job's options are stored with every default filled in (the API's model_dump) and read back by the worker;
+    the dashboard's form always sends the default max_joints. Only another value fixes the count."""
+    from simcore.motion_rig.stage import params_for
+
+    stored = JobOptions(**asked).model_dump(mode="json")
+    params = params_for(JobOptions.model_validate(stored))
+    assert params.bones == bones and params.max_bones == JobOptions(**asked).max_joints
