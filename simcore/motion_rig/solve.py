@@ -68,7 +68,6 @@ class MotionRigParams:
     total_sweeps: int = 200  # sweeps over all rounds (the time of the re-fit is about this many sweeps at most)
     rounds: int = 24  # at most this many weight → transform alternations on the tree
     weight_iterations: int = 3
-    inside_resolution: int = JOINT_TEST_RESOLUTION  # voxels along the longest side of the solid joints move into
     inside_reach: float = 2.0  # voxels: a joint the motion pins outside still moves to an inside voxel this near
     round_gain: float = 0.01  # alternations stop once `patience` rounds in a row cut the error by less than this
     patience: int = 2
@@ -241,7 +240,7 @@ def rig_from_motion(rest: np.ndarray, faces: np.ndarray, frames: np.ndarray, fps
     pairs = bone_pairs(rest, surface, bones.weights, bones.transforms, spread=params.spread,
                        pivot_regularisation=params.pivot_regularisation)
     tree = bone_tree(rest, bones.weights, pairs, params.slide_mismatch * diag)
-    grid = solid_voxels(rest, faces, resolution=params.inside_resolution)
+    grid = solid_voxels(rest, faces, resolution=JOINT_TEST_RESOLUTION)  # the gate's joints-inside solid
     inside = joints_inside(grid, tree, reach=params.inside_reach)
     moved_in = np.any(inside != tree.joints, axis=1)  # joints outside the solid that could be moved in
     tree = replace(tree, joints=inside)
