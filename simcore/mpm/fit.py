@@ -46,7 +46,7 @@ from simcore.mpm.anchors import driver_anchors, falloff_weights, joint_motions
 from simcore.mpm.drivers import CUBE
 from simcore.mpm.materials import PRESETS, Prototypes, farthest_points, lame, seed_prototypes
 from simcore.mpm.measures import chamfer, chamfer_grad
-from simcore.mpm.sampling import sample_volume
+from simcore.mpm.sampling import sample_on_grid
 
 NEIGHBOURS = 16  # target vertices averaged for a virtual joint's initial velocity
 EMBED = 8  # particles whose mean motion carries a driving point (anchored drive)
@@ -105,6 +105,7 @@ class FitScene:
     driver_particles: np.ndarray | None = None  # (D, EMBED) particles each driving point is embedded in
     joint_motion: tuple[np.ndarray, np.ndarray] | None = None  # per-frame joint rotations (T, M, 3, 3), translations (T, M, 3)
     particle_weights: np.ndarray | None = None  # (N, M) the particles' weights over the joints of joint_motion
+    grid_note: str | None = None  # why the grid is coarser than asked (simcore.mpm.sampling.sample_on_grid)
 
 
 @dataclass
@@ -125,9 +126,9 @@ def prepare_scene(targets: np.ndarray, faces: np.ndarray, fps: float, config: Fi
     """Sample frame 0, seed prototypes and drivers, initialise velocities. targets: (T, V, 3) float, faces: (F, 3)."""
     targets = np.asarray(targets, np.float64)
     lo, hi = targets.min(axis=1), targets.max(axis=1)
-    grid = int(np.ceil(config.grid / 4) * 4)
-    dx = float((hi - lo).max()) / (grid - 14)  # 3-node wall band + 4 free nodes on each side
-    sample = sample_volume(targets[0], faces, 0.5 * dx, max_particles=config.max_particles, seed=config.seed)
+    placed = sample_on_grid(targets[0], faces, float((hi - lo).max()), int(np.ceil(config.grid / 4) * 4), 14,
+                            max_particles=config.max_particles, seed=config.seed)  # 3-node wall band + 4 free nodes a side
+    sample, grid, dx = placed.sample, placed.grid, placed.dx
     material = PRESETS[config.preset]
     protos = seed_prototypes(sample.positions, config.prototypes, material, sample.volume, seed=config.seed)
     joint_weights = None
@@ -153,7 +154,8 @@ def prepare_scene(targets: np.ndarray, faces: np.ndarray, fps: float, config: Fi
                     protos, drivers0, velocities,
                     0.5 * (lo + hi), dx, grid, config.substeps, frame_dt, material.nu,
                     np.asarray(driver_centres, np.float64), joint_weights, anchors,
-                    np.asarray(embedded, np.int64).reshape(len(drivers0), -1), (rot, trans), particle_weights)
+                    np.asarray(embedded, np.int64).reshape(len(drivers0), -1), (rot, trans), particle_weights,
+                    placed.note)
 
 
 def driver_path(scene: FitScene, velocities: np.ndarray) -> FitScene:

@@ -80,8 +80,10 @@ def fit_sequence(frames: np.ndarray, faces: np.ndarray, fps: float, config: FitC
     log(f"{len(scene.x0)} particles, grid {scene.grid}, dx {scene.dx:.4f}, {len(scene.drivers0)} driving points "
         f"({config.drivers}, {len(scene.joints) if scene.joints is not None else 0} joints), "
         f"{scene.protos.count} prototypes, {len(targets)} frames")
+    if scene.grid_note:
+        log(scene.grid_note)
     out: dict[str, Any] = {
-        "frames": len(targets), "fps": fps, "particles": int(len(scene.x0)), "grid": scene.grid,
+        "frames": len(targets), "fps": fps, "particles": int(len(scene.x0)), "grid": scene.grid, "grid_note": scene.grid_note,
         "substeps": scene.substeps, "prototypes": scene.protos.count, "driving_points": int(len(scene.drivers0)),
         "config": dataclasses.asdict(config), "units": "chamfer ×100, mesh scaled to longest side 1",
     }

@@ -36,7 +36,7 @@ from simcore.geometry.referenced import referenced_mesh
 from simcore.motion.types import JointAnimation
 from simcore.mpm.drivers import DrivingPoints, animation_world_transforms, driver_positions, interpolate_transforms, leaf_tips, place_drivers
 from simcore.mpm.materials import PRESETS, max_wave_speed, particle_lame, prototype_weights, region_stiffness, seed_prototypes
-from simcore.mpm.sampling import ParticleSample, nearest_rows, sample_volume
+from simcore.mpm.sampling import ParticleSample, nearest_rows, sample_on_grid
 from simcore.mpm.simulate import FramePlan
 from simcore.options import RefineOptions
 from simcore.skeleton.kinematics import bind_matrices
@@ -220,9 +220,10 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
     box = np.concatenate([np.stack([surface.min(0), surface.max(0)])[None], _boxes(surface, w_used, world, inv_bind)])
     extent = float((box[:, 1] - box[:, 0]).max())
     height = float((box[0, 1] - box[0, 0]).max())
-    dx = extent / (grid - 2 * (BOUND + MARGIN_NODES))
-
-    sample = sample_volume(vertices, faces, 0.5 * dx, max_particles=max_particles, seed=seed)
+    placed = sample_on_grid(vertices, faces, extent, grid, 2 * (BOUND + MARGIN_NODES), max_particles=max_particles, seed=seed)
+    sample, grid, dx = placed.sample, placed.grid, placed.dx
+    if placed.note:
+        info["grid_note"] = "; ".join(filter(None, [info.get("grid_note"), placed.note]))
     material = PRESETS[opts.preset]
     protos = seed_prototypes(sample.positions, opts.prototypes, material, sample.volume, seed=seed)
     particle_w = nearest_rows(vertices[used], w_used, sample.positions)
@@ -255,6 +256,7 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
                            pre, inv_bind, skin_joints, skin_weights, tether, height, info)
     info.update({
         "grid": grid, "dx_m": round(dx, 6), "particles": sample.count, "particle_counts": sample.counts,
+        "particles_per_cell": round(placed.per_cell, 2),
         "driving_points": drivers.count, "drivers": opts.drivers, "preset": opts.preset,
         "prototypes": protos.count, "rate_fps": opts.rate, "keys": len(times), "clip_fps": float(animation.fps),
         "substeps_total": scene.total_substeps(), "dt_s": dt,

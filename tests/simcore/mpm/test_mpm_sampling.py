@@ -1,6 +1,6 @@
 import numpy as np
 
-from simcore.mpm.sampling import sample_volume
+from simcore.mpm.sampling import MIN_PARTICLES_PER_CELL, sample_on_grid, sample_volume
 
 
 def test_every_vertex_is_a_particle_and_volume_is_filled(capsule):
@@ -24,3 +24,19 @@ def test_sampling_is_deterministic_and_respects_the_budget(capsule):
     assert a.count <= 2000
     assert a.notes and "thinned" in a.notes[0]
     assert np.all(a.vertex_particles >= 0)  # vertices survive thinning while they fit in half the budget
+
+
+def test_a_budget_too_small_for_the_grid_coarsens_it(capsule):
+    vertices, faces, *_ = capsule()
+    extent = float(np.ptp(vertices, axis=0).max())
+    roomy = sample_on_grid(vertices, faces, extent, 32, 14, max_particles=None, seed=2)
+    assert roomy.grid == 32 and roomy.note is None and roomy.per_cell >= MIN_PARTICLES_PER_CELL
+    tight = sample_on_grid(vertices, faces, extent, 96, 14, max_particles=1000, seed=2)
+    assert tight.grid < 96 and tight.grid % 4 == 0
+    assert tight.per_cell >= MIN_PARTICLES_PER_CELL
+    assert tight.dx == extent / (tight.grid - 14)
+    assert tight.note and "grid lowered from 96" in tight.note
+    assert tight.sample.count <= 1000
+    # the grid is coarsened no further than needed: one step finer would be under the minimum
+    finer = sample_on_grid(vertices, faces, extent, tight.grid + 4, 14, max_particles=1000, seed=2)
+    assert finer.grid < tight.grid + 4
