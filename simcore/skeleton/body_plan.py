@@ -1,8 +1,8 @@
 """A skeleton's body plan read from its tree and rest positions: spine, neck, head, tails and paired limbs.
 
-The mid-plane is the vertical plane through the root that mirrors the joints best (across x or z). The spine
-runs from the root to the head: the mid-plane leaf whose path carries the most side branches (arms, front
-legs, wings), the highest on a tie. Joints on that path up to the last side branch are the spine, the rest
+The mid-plane is the vertical plane that mirrors the joints best (across x or z, through the root or the joints'
+median). The spine runs from the root to the head: the mid-plane leaf whose path carries the most side branches
+(arms, front legs, wings), the highest on a tie. Joints on that path up to the last side branch are the spine, the rest
 the neck and head. Every other branch is a limb, named by what it does: a `leg` reaches the floor, a `wing`
 is long (≥ 0.45 of the skeleton's size), else an `arm` (or a `fin` on a body with no legs); on the mid-plane
 it is a `tail` (an `jaw` off the head); off the head it is an `ear`. Pairs are told apart by side (L/R: the
@@ -68,16 +68,22 @@ def _subtrees(children: list[list[int]]) -> list[list[int]]:
     return out
 
 
-def _lateral_axis(positions: np.ndarray) -> int:
-    """0 (x) or 2 (z): the horizontal axis across which the joints mirror best through the root, relative to
-    their spread along it (a flat rig mirrors across its thickness trivially)."""
-    scores = []
+def _mid_plane(positions: np.ndarray) -> tuple[int, float]:
+    """(axis, offset): the vertical plane across which the joints mirror best, relative to their spread along its
+    normal (a flat rig mirrors across its thickness trivially). The normal is x (0) or z (2); the plane passes
+    through the root or through the joints' median, whichever mirrors them better (a rig read off motion puts
+    its root where bones turn, which may be off the body's mid-plane)."""
+    best: tuple[float, int, float] | None = None
     for axis in (0, 2):
-        mirrored = positions.copy()
-        mirrored[:, axis] = 2 * positions[0, axis] - positions[:, axis]
-        d = np.linalg.norm(positions[:, None] - mirrored[None], axis=-1)
-        scores.append(d.min(axis=1).mean() / (np.ptp(positions[:, axis]) + 1e-9))
-    return 0 if scores[0] <= scores[1] + 1e-9 else 2
+        for centre in (float(positions[0, axis]), float(np.median(positions[:, axis]))):
+            mirrored = positions.copy()
+            mirrored[:, axis] = 2 * centre - positions[:, axis]
+            d = np.linalg.norm(positions[:, None] - mirrored[None], axis=-1)
+            score = d.min(axis=1).mean() / (np.ptp(positions[:, axis]) + 1e-9)
+            if best is None or score < best[0] - 1e-9:
+                best = (score, axis, centre)
+    assert best is not None
+    return best[1], best[2]
 
 
 def _longest_path(start: int, children: list[list[int]], subtrees: list[list[int]]) -> list[int]:
@@ -96,8 +102,8 @@ class _Reader:
         self.subtrees = _subtrees(self.children)
         self.size = max(float(np.ptp(self.pos, axis=0).max()), 1e-9)
         self.height = max(float(np.ptp(self.pos[:, 1])), 1e-9)
-        self.axis = _lateral_axis(self.pos)
-        self.offset = self.pos[:, self.axis] - self.pos[0, self.axis]
+        self.axis, centre = _mid_plane(self.pos)
+        self.offset = self.pos[:, self.axis] - centre
 
     def lean(self, j: int) -> float:
         """Mean signed distance of j's subtree from the mid-plane."""

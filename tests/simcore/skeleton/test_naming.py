@@ -127,3 +127,16 @@ def test_a_creature_turned_around_keeps_its_left():
     names = joint_names(turned, "generic").names
     left = turned.positions[names.index("leg_front_L_01")]
     assert left[0] < 0  # facing -Z, the character's left is -X
+
+
+def test_a_root_off_the_mid_plane_still_reads_the_body_plan():
+    """A rig read off motion puts its root where the bones turn, not on the mid-plane: the plane is the one the
+    joints mirror across best, not the one through the root."""
+    skeleton = _creature(wings=False)
+    positions = skeleton.positions.copy()
+    positions[0, 0] = 0.12  # 5 % of the size off the mid-plane
+    names = joint_names(Skeleton(positions, skeleton.parents, skeleton.names), "generic").names
+    expected = {"hips", "spine_01", "spine_02", "neck", "head", "tail_01", "leg_front_L_01", "leg_front_R_01",
+                "leg_back_L_01", "leg_back_R_01"}
+    assert expected <= set(names), names
+    assert positions[names.index("leg_front_L_01")][0] > 0
