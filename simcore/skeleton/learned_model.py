@@ -63,6 +63,7 @@ class SkeletonModelConfig:
     queries: int = 128  # input points that become the conditioning prefix
     max_tokens: int = 512  # context length of the token sequence, <bos> and <eos> included
     frequencies: int = 8  # Fourier octaves of point positions and coordinate values
+    dropout: float = 0.0  # residual dropout in every block while training (inference runs without)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -103,17 +104,18 @@ class Attention(nn.Module):
 class Block(nn.Module):
     """Pre-norm transformer block: attention (self, or to a context) then an MLP."""
 
-    def __init__(self, width: int, heads: int) -> None:
+    def __init__(self, width: int, heads: int, dropout: float = 0.0) -> None:
         super().__init__()
         self.norm1, self.norm2 = nn.LayerNorm(width), nn.LayerNorm(width)
         self.attn = Attention(width, heads)
         self.mlp = nn.Sequential(nn.Linear(width, 4 * width), nn.GELU(), nn.Linear(4 * width, width))
+        self.drop = nn.Dropout(dropout)
 
     def forward(self, x: torch.Tensor, context: torch.Tensor | None = None, causal: bool = False,
                 cache: dict | None = None) -> torch.Tensor:
         h = self.norm1(x)
-        x = x + self.attn(h, h if context is None else context, causal=causal, cache=cache)
-        return x + self.mlp(self.norm2(x))
+        x = x + self.drop(self.attn(h, h if context is None else context, causal=causal, cache=cache))
+        return x + self.drop(self.mlp(self.norm2(x)))
 
 
 class ShapeEncoder(nn.Module):
@@ -123,8 +125,8 @@ class ShapeEncoder(nn.Module):
         super().__init__()
         self.config = config
         self.embed = nn.Linear(6 + 6 * config.frequencies, config.width)
-        self.cross = Block(config.width, config.heads)
-        self.layers = nn.ModuleList(Block(config.width, config.heads) for _ in range(config.encoder_layers))
+        self.cross = Block(config.width, config.heads, config.dropout)
+        self.layers = nn.ModuleList(Block(config.width, config.heads, config.dropout) for _ in range(config.encoder_layers))
 
     def forward(self, points: torch.Tensor) -> torch.Tensor:
         features = self.embed(torch.cat([points, fourier(points[..., :3], self.config.frequencies)], dim=-1))
@@ -148,7 +150,7 @@ class SkeletonTokenModel(nn.Module):
         self.values = nn.Linear(2 * config.frequencies, w)
         self.slots = nn.Embedding(NUM_SLOTS, w)
         self.positions = nn.Embedding(config.max_tokens, w)
-        self.layers = nn.ModuleList(Block(w, config.heads) for _ in range(config.decoder_layers))
+        self.layers = nn.ModuleList(Block(w, config.heads, config.dropout) for _ in range(config.decoder_layers))
         self.norm = nn.LayerNorm(w)
         self.head = nn.Linear(w, VOCAB_SIZE)
         self.register_buffer("bin_values", torch.from_numpy(dequantize(np.arange(NUM_BINS))).to(torch.float32), persistent=False)

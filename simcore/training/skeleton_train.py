@@ -24,10 +24,16 @@ from torch.nn import functional as F
 from simcore.metrics.skeleton import chamfer
 from simcore.model_weights import save_weights
 from simcore.skeleton.grammar import SkeletonGrammar
-from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel, sequence_slots
+from simcore.skeleton.learned_model import (
+    BRANCH_CHILD_X,
+    BRANCH_PARENT_X,
+    SkeletonModelConfig,
+    SkeletonTokenModel,
+    sequence_slots,
+)
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
-from simcore.skeleton.vocab import CLASS_TOKENS, NUM_BINS, PAD, VOCAB_SIZE
+from simcore.skeleton.vocab import CLASS_TOKENS, NUM_BINS, PAD, VOCAB_SIZE, dequantize, quantize
 from simcore.training.skeleton_dataset import SkeletonSample
 
 
@@ -41,6 +47,7 @@ class SkeletonTrainConfig:
     lr: float = 1e-3
     weight_decay: float = 0.01
     coord_sigma: float = 1.0
+    axis_scale: float = 0.0  # each step squashes a sample along x, y and z by factors drawn from [1 - this, 1]
     val_every: int = 250
     decode_every: int = 1000
     decode_val: int = 6
@@ -83,16 +90,40 @@ def soft_targets(sigma: float) -> torch.Tensor:
     return table
 
 
-def batch_tensors(samples: list[LoadedSample], points: int, rng: np.random.Generator | None) -> tuple[torch.Tensor, ...]:
+def token_axes(slots: torch.Tensor) -> torch.Tensor:
+    """(L,) axis (0 x, 1 y, 2 z) of each token of a sequence whose next-token slots are `slots` (L,), for the
+    coordinate tokens (anything for the others): token t's slot is slots[t - 1] (see learned_model.next_slot)."""
+    own = torch.cat([torch.zeros(1, dtype=slots.dtype), slots[:-1]])
+    return torch.where(own < 3, own, torch.where(own == BRANCH_CHILD_X, 0, (own - BRANCH_PARENT_X) % 3))
+
+
+def squashed(sample: LoadedSample, factors: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
+    """(points, tokens) of `sample` scaled by `factors` (3,) ≤ 1 along x, y, z about the token frame's centre:
+    positions times the factors, normals by the inverse (then unit length), coordinate bins re-quantised."""
+    f = torch.from_numpy(np.asarray(factors, np.float32))
+    normals = sample.points[:, 3:] / f
+    points = torch.cat([sample.points[:, :3] * f, normals / normals.norm(dim=1, keepdim=True).clamp_min(1e-9)], dim=1)
+    coord = sample.tokens < NUM_BINS
+    scale = f.double()[token_axes(sample.slots)]
+    moved = torch.from_numpy(quantize(dequantize(sample.tokens.clamp(max=NUM_BINS - 1).numpy()) * scale.numpy()))
+    return points, torch.where(coord, moved, sample.tokens)
+
+
+def batch_tensors(samples: list[LoadedSample], points: int, rng: np.random.Generator | None,
+                  axis_scale: float = 0.0) -> tuple[torch.Tensor, ...]:
     """points (B, N, 6), inputs (B, L-1), slots (B, L-1), targets (B, L-1) padded with <pad>; a random `points`
-    of each sample's points with `rng`, the first ones without."""
+    of each sample's points with `rng`, the first ones without; with `rng` and `axis_scale`, each sample squashed
+    along each axis by a random factor in [1 - axis_scale, 1] (`squashed`)."""
     length = max(len(s.tokens) for s in samples)
     cloud, inputs, slots, targets = [], [], [], []
     for s in samples:
         n = len(s.points)
         rows = torch.from_numpy(rng.choice(n, size=min(points, n), replace=False)) if rng is not None else torch.arange(min(points, n))
-        cloud.append(s.points[rows])
-        padded = F.pad(s.tokens, (0, length - len(s.tokens)), value=PAD)
+        pts, tokens = s.points, s.tokens
+        if rng is not None and axis_scale > 0:
+            pts, tokens = squashed(s, rng.uniform(1.0 - axis_scale, 1.0, 3))
+        cloud.append(pts[rows])
+        padded = F.pad(tokens, (0, length - len(tokens)), value=PAD)
         inputs.append(padded[:-1])
         targets.append(padded[1:])
         slots.append(F.pad(s.slots, (0, length - len(s.slots)))[:-1])
@@ -166,7 +197,7 @@ def train_skeleton(config: SkeletonTrainConfig, data: Path, out: Path, log: Path
                              "val": best}) + "\n")
         for step in range(1, config.steps + 1):
             picked = [train[i] for i in rng.choice(len(train), size=config.batch, p=chance)]
-            loss = batch_loss(model, batch_tensors(picked, config.points, rng), table)
+            loss = batch_loss(model, batch_tensors(picked, config.points, rng, config.axis_scale), table)
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)

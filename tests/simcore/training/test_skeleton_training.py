@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 from simcore.training.sample_cache import save_sample
 from simcore.training.skeleton_dataset import make_skeleton_sample, upright_turned
-from simcore.training.skeleton_train import SkeletonTrainConfig, train_skeleton
+from simcore.training.skeleton_train import LoadedSample, SkeletonTrainConfig, squashed, train_skeleton
 from simcore.training.skin_samples import normalised, variants
 from tests.simcore.training.creatures import capsule_dog
 
@@ -36,7 +37,7 @@ def test_tiny_model_lowers_its_loss_and_ships_a_loadable_file(tmp_path: Path) ->
                     make_skeleton_sample(upright_turned(c, rng, 20.0), rng, 512, tokenizer).arrays())
     save_sample(tmp_path / "data" / "val" / "dog.npz", make_skeleton_sample(normalised(creature), rng, 512, tokenizer).arrays())
     config = SkeletonTrainConfig(steps=60, batch=3, points=256, lr=3e-3, val_every=30, decode_every=60, decode_val=1,
-                                 log_every=10, threads=1, model=TINY)
+                                 log_every=10, threads=1, axis_scale=0.1, model=replace(TINY, dropout=0.1))
     out = tmp_path / "skeleton.safetensors"
     summary = train_skeleton(config, tmp_path / "data", out, tmp_path / "log.jsonl", lambda step, total, entry: None)
     assert summary["val"]["nll"] < summary["val_at_start"]["nll"] - 1.0
@@ -65,6 +66,28 @@ def test_slots_name_each_next_coordinate() -> None:
     slots = sequence_slots(tokens, SkeletonGrammar())
     assert slots[1] == 0 and list(slots[2:4]) == [1, 2]  # after <cls> x comes y, then z
     assert set(slots.tolist()) <= {0, 1, 2, 3, 4, 5, 6}  # no template joints in a dog
+
+
+def test_a_squashed_sample_moves_points_and_joints_alike() -> None:
+    vertices, faces, skeleton = quadruped(count=6)
+    tokenizer, unit = SkeletonTokenizer(), Normalization(np.zeros(3), 1.0)
+    tokens = tokenizer.encode(skeleton, Normalization.from_points(vertices))
+    rng = np.random.default_rng(0)
+    normals = rng.normal(size=(50, 3))
+    cloud = np.hstack([rng.uniform(-1, 1, (50, 3)), normals / np.linalg.norm(normals, axis=1, keepdims=True)])
+    sample = LoadedSample(torch.from_numpy(cloud.astype(np.float32)), torch.from_numpy(tokens),
+                          torch.from_numpy(sequence_slots(tokens, SkeletonGrammar())), np.zeros((1, 3)), "quadruped")
+    factors = np.array([0.5, 0.8, 1.0])
+    points, squashed_tokens = squashed(sample, factors)
+    np.testing.assert_allclose(points[:, :3].numpy(), cloud[:, :3] * factors, atol=1e-6)
+    np.testing.assert_allclose(points[:, 3:].norm(dim=1).numpy(), 1.0, atol=1e-5)
+    assert np.all(np.sum(points[:, 3:].numpy() * cloud[:, 3:] / factors, axis=1) > 0)  # normals stay on their side
+    before = tokenizer.model_frame(tokenizer.decode(tokens, unit).positions)
+    after = tokenizer.model_frame(tokenizer.decode(squashed_tokens.numpy(), unit).positions)
+    np.testing.assert_allclose(after, before * factors, atol=2.0 / 256)  # within one coordinate bin
+    np.testing.assert_array_equal(squashed_tokens[tokens >= 256].numpy(), tokens[tokens >= 256])  # specials kept
+    unchanged = squashed(sample, np.ones(3))[1].numpy()
+    np.testing.assert_array_equal(unchanged, tokens)
 
 
 @pytest.mark.parametrize("content", [None, b"not a safetensors file"])
