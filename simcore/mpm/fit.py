@@ -47,6 +47,7 @@ from simcore.mpm.drivers import CUBE
 from simcore.mpm.materials import PRESETS, Prototypes, farthest_points, lame, seed_prototypes
 from simcore.mpm.measures import chamfer, chamfer_grad
 from simcore.mpm.sampling import sample_on_grid
+from simcore.mpm.scene import BOUND, MARGIN_NODES
 
 NEIGHBOURS = 16  # target vertices averaged for a virtual joint's initial velocity
 EMBED = 8  # particles whose mean motion carries a driving point (anchored drive)
@@ -126,8 +127,8 @@ def prepare_scene(targets: np.ndarray, faces: np.ndarray, fps: float, config: Fi
     """Sample frame 0, seed prototypes and drivers, initialise velocities. targets: (T, V, 3) float, faces: (F, 3)."""
     targets = np.asarray(targets, np.float64)
     lo, hi = targets.min(axis=1), targets.max(axis=1)
-    placed = sample_on_grid(targets[0], faces, float((hi - lo).max()), int(np.ceil(config.grid / 4) * 4), 14,
-                            max_particles=config.max_particles, seed=config.seed)  # 3-node wall band + 4 free nodes a side
+    placed = sample_on_grid(targets[0], faces, float((hi - lo).max()), int(np.ceil(config.grid / 4) * 4),
+                            2 * (BOUND + MARGIN_NODES), max_particles=config.max_particles, seed=config.seed)
     sample, grid, dx = placed.sample, placed.grid, placed.dx
     material = PRESETS[config.preset]
     protos = seed_prototypes(sample.positions, config.prototypes, material, sample.volume, seed=config.seed)
@@ -365,7 +366,8 @@ class PhysicsFit:
         worse than it started is undone, as the material phase keeps its best point."""
         frames = len(self.controls)
         xs = self.forward()  # checkpoints for every frame start
-        start = (sum(self._frame_loss(xs[f], f + 1)[0] for f in range(first, frames)), self.controls.copy())
+        start_loss = sum(self._frame_loss(xs[f], f + 1)[0] for f in range(first, frames))
+        start_controls = self.controls.copy()
         total = 0.0
         for f in range(first, frames):
             loss = 0.0
@@ -381,10 +383,10 @@ class PhysicsFit:
             x = self.forward(f, f)[0]  # refresh the next frame's checkpoint
             total += self._frame_loss(x, f + 1)[0]
             progress((f + 1) / frames)
-        if total > start[0]:
-            self.controls = start[1]
+        if total > start_loss:
+            self.controls = start_controls
             self.forward()
-            total = start[0]
+            total = start_loss
         return total
 
 

@@ -42,6 +42,10 @@ def next_slot(state: GrammarState) -> int:
     return BRANCH_CHILD_X if left == 3 else axis
 
 
+# Axis (0 x, 1 y, 2 z) of the coordinate a slot asks for; a boundary slot's coordinate is a free joint's x.
+SLOT_AXES = np.array([0, 1, 2, 0, 0, 1, 2] + [k % 3 for k in range(NUM_SLOTS - TEMPLATE)], dtype=np.int64)
+
+
 def sequence_slots(tokens: np.ndarray, grammar: SkeletonGrammar) -> np.ndarray:
     """(L,) int64: for each position t, the slot of token t + 1 (the last entry, after <eos>, is 0)."""
     out = np.zeros(len(tokens), dtype=np.int64)

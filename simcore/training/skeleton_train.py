@@ -24,13 +24,7 @@ from torch.nn import functional as F
 from simcore.metrics.skeleton import chamfer
 from simcore.model_weights import save_weights
 from simcore.skeleton.grammar import SkeletonGrammar
-from simcore.skeleton.learned_model import (
-    BRANCH_CHILD_X,
-    BRANCH_PARENT_X,
-    SkeletonModelConfig,
-    SkeletonTokenModel,
-    sequence_slots,
-)
+from simcore.skeleton.learned_model import SLOT_AXES, SkeletonModelConfig, SkeletonTokenModel, sequence_slots
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 from simcore.skeleton.vocab import CLASS_TOKENS, NUM_BINS, PAD, VOCAB_SIZE, dequantize, quantize
@@ -94,7 +88,7 @@ def token_axes(slots: torch.Tensor) -> torch.Tensor:
     """(L,) axis (0 x, 1 y, 2 z) of each token of a sequence whose next-token slots are `slots` (L,), for the
     coordinate tokens (anything for the others): token t's slot is slots[t - 1] (see learned_model.next_slot)."""
     own = torch.cat([torch.zeros(1, dtype=slots.dtype), slots[:-1]])
-    return torch.where(own < 3, own, torch.where(own == BRANCH_CHILD_X, 0, (own - BRANCH_PARENT_X) % 3))
+    return torch.from_numpy(SLOT_AXES)[own]
 
 
 def squashed(sample: LoadedSample, factors: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
