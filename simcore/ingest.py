@@ -13,6 +13,7 @@ from simcore.geometry.mesh import IngestedMesh
 from simcore.geometry.mesh_stats import mesh_stats
 from simcore.geometry.parts import bulk_size, surface_parts
 from simcore.geometry.referenced import referenced_mesh
+from simcore.geometry.similarity import rotation_from_covariance
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset, rig_rest_matrices
 from simcore.io.gltf_static import bake_static_glb, static_arrays
@@ -108,10 +109,9 @@ def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray)
     for r in rows:
         weights.rows[r], weights.data[r] = [], []
     rig.weights = weights.tocsr()
-    rot = joints_world[:, :3, :3]
-    u, _, vt = np.linalg.svd(rot)
+    rotations = rotation_from_covariance(joints_world[:, :3, :3])  # nearest proper rotations: a mirrored joint too
     rig.skeleton = Skeleton(joints_world[:, :3, 3], rig.skeleton.parents, rig.skeleton.names, [],
-                            Rotation.from_matrix(u @ vt).as_quat(), rig.skeleton.file_order, rig.skeleton.file_parents)
+                            Rotation.from_matrix(rotations).as_quat(), rig.skeleton.file_order, rig.skeleton.file_parents)
     rig.vertices = vertices
     rig.bind_matrices = joints_world
     return rig

@@ -12,6 +12,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput
+from simcore.geometry.similarity import rotation_from_covariance
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
 from simcore.motion.timing import sample_track
@@ -54,17 +55,6 @@ def _estimate_fps(times: list[np.ndarray]) -> float:
     if not len(steps):
         return DEFAULT_FPS
     return float(np.clip(np.round(1.0 / np.median(steps)), 10.0, 60.0))
-
-
-def _polar_rotation(m: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) nearest rotation of each matrix (drops scale and shear)."""
-    u, _, vt = np.linalg.svd(m)
-    r = u @ vt
-    flip = np.linalg.det(r) < 0
-    if np.any(flip):
-        u[flip, :, -1] *= -1
-        r = u @ vt
-    return r
 
 
 def _static_trs(node: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -198,7 +188,7 @@ def read_gltf_clip(
         raise InvalidInput(f"clip would have {n} frames at {fps:g} fps, over {MAX_CLIP_FRAMES}", code="too_many_frames", field="motion")
     times = t0 + np.arange(n) / fps
     world = sample_node_worlds(doc, index, times, joint_nodes)  # (T, J, 4, 4)
-    rot = _polar_rotation(world[..., :3, :3])
+    rot = rotation_from_covariance(world[..., :3, :3])
     pos = world[..., :3, 3]
     parents = skel.parents
     par = np.maximum(parents, 0)
@@ -209,7 +199,7 @@ def read_gltf_clip(
     )
     rest = bind_placement(doc, asset) @ bind
     source = Skeleton(rest[:, :3, 3], parents, skel.names, skel.kinds,
-                      Rotation.from_matrix(_polar_rotation(rest[:, :3, :3])).as_quat())
+                      Rotation.from_matrix(rotation_from_covariance(rest[:, :3, :3])).as_quat())
     quats = Rotation.from_matrix(local_rot.reshape(-1, 3, 3)).as_quat().reshape(n, skel.num_joints, 4)
     anim = JointAnimation(list(skel.names), fps, quats, local_tr, clip_names(doc)[index])
     return MotionClip(source, anim, rest_is_standing=True, source_format="gltf", unit_scale=1.0, unit="file")

@@ -8,10 +8,12 @@ import json
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial.transform import Rotation
 
 from simcore.ingest import ingest
 from simcore.io.gltf_document import GltfDocument
 from tests.simcore.io.rig_export_fixtures import capsule_glb, glb_with_json
+from tests.simcore.io.studio_rig_fixtures import studio_rig, to_glb
 
 
 @pytest.mark.parametrize("scale", [[-1.0, 1.0, 1.0], [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]])
@@ -55,3 +57,17 @@ def test_a_mirror_flips_the_tangent_handedness(scale: list[float], sign: float) 
     normal = doc.accessor(prim["attributes"]["NORMAL"])[0]
     a, b, c = mesh.vertices[mesh.faces[0]]
     assert np.dot(np.cross(b - a, c - a), normal) > 0  # winding and normal still agree
+
+
+def test_a_mirrored_joint_keeps_a_proper_bind_rotation() -> None:
+    """A joint node with a negative scale (a mirrored limb) has a left-handed frame: the source rig keeps the
+    nearest proper rotation instead of failing the upload."""
+    doc = studio_rig(["hips", "spine", "head"])
+    head = next(n for n in doc["nodes"] if n["name"] == "head")
+    head["scale"] = [-1.0, 1.0, 1.0]
+    rig = ingest(to_glb(doc), "glb").source_rig
+    assert rig is not None and rig.skeleton.orientations is not None
+    np.testing.assert_allclose(np.linalg.norm(rig.skeleton.orientations, axis=1), 1.0, atol=1e-9)
+    frames = Rotation.from_quat(rig.skeleton.orientations).as_matrix()
+    np.testing.assert_allclose(np.linalg.det(frames), 1.0, atol=1e-9)
+    np.testing.assert_allclose(rig.skeleton.positions[rig.skeleton.names.index("head"), 1], 1.2, atol=1e-6)
