@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
 Axis = Literal["x", "y", "z", "-x", "-y", "-z"]
 
@@ -63,9 +63,12 @@ class JobOptions(_Strict):
 
     skeleton: Literal["auto", "geometric", "humanoid", "learned", "keep", "from_motion"] = Field(
         "auto", description="from_motion: recover skeleton, weights and animation from a mesh-sequence upload "
-                            "(what auto does for a sequence); max_joints given sets its bone count",
+                            "(what auto does for a sequence); sequence_bones sets its bone count",
     )
-    max_joints: int = Field(64, ge=2, le=256)
+    max_joints: int = Field(64, ge=2, le=256, description="the most joints a predicted skeleton may have")
+    sequence_bones: int | None = Field(
+        None, ge=2, le=256, description="mesh sequences: exactly this many joints, every one a bone read off the "
+                                        "motion (at most max_joints); default: the count is chosen, up to max_joints")
     up_axis: Axis | None = Field(None, description="override the input's up axis (glTF input is +Y up)")
     forward_axis: Axis | None = Field(None, description="override the facing direction used by the humanoid fit")
     units: Literal["auto", "m", "cm", "mm", "in"] = "auto"
@@ -95,3 +98,11 @@ class JobOptions(_Strict):
     stages: list[Literal["skeleton", "skin", "motion", "refine", "export"]] | None = Field(
         None, description="run only these stages after ingest (default: all; [] = ingest only)"
     )
+
+    @field_validator("sequence_bones")
+    @classmethod
+    def _bones_within_cap(cls, bones: int | None, info: ValidationInfo) -> int | None:
+        cap = info.data.get("max_joints")
+        if bones is not None and cap is not None and bones > cap:
+            raise ValueError(f"sequence_bones ({bones}) is more than max_joints ({cap}); raise max_joints too")
+        return bones

@@ -1,8 +1,9 @@
 """Pipeline stage `skeleton` for mesh-sequence uploads: skeleton, weights and animation recovered from motion.
 
 It stands in for the skeleton, skin and motion stages (simcore.pipeline plans it when ingest found a sequence and
-options.skeleton is "auto" or "from_motion"). Options used: `max_joints` (a fixed bone count when not the default, else
-the cap of the automatic count), `max_influences`, `motion.fps` (resampling rate of a morph animation, read at ingest).
+options.skeleton is "auto" or "from_motion"). Options used: `sequence_bones` (a fixed joint count, all of them motion
+bones), `max_joints` (the cap of the automatic count), `max_influences`, `motion.fps` (resampling rate of a morph
+animation, read at ingest).
 Writes skeleton.json and report["skeleton"], report["skinning"], report["motion_rig"] (per-frame RMSE of the rig
 and of free Dem Bones at the same count, in units of the first frame's bounding-box diagonal, bone count, times).
 """
@@ -23,12 +24,11 @@ if TYPE_CHECKING:
 
 
 def params_for(options: JobOptions) -> MotionRigParams:
-    """The solver parameters a job's options ask for: a `max_joints` other than its default → that many bones, else
-    the count is chosen, up to the default. Told by value, not by whether the field was set: a job's options are
-    stored with every default filled in, and the dashboard's form always sends the default."""
-    default = type(options).model_fields["max_joints"].default
-    fixed = options.max_joints if options.max_joints != default else None
-    return MotionRigParams(max_influences=int(options.max_influences), bones=fixed, max_bones=options.max_joints)
+    """The solver parameters a job's options ask for: exactly `sequence_bones` joints, every one a bone read off the
+    motion, when given; else a count chosen up to `max_joints`, shape joints included."""
+    fixed = options.sequence_bones
+    return MotionRigParams(max_influences=int(options.max_influences), bones=fixed,
+                           max_bones=options.max_joints if fixed is None else fixed)
 
 
 def run(state: PipelineState, progress: StageProgress) -> None:

@@ -58,6 +58,13 @@ def test_real_errors_fit_the_documented_problem_schema(client, auth):
     assert answers[-1].json()["field"] == "options.max_joints"
 
 
+def test_more_sequence_bones_than_max_joints_is_a_problem_naming_the_field(client, auth):
+    r = client.post("/api/v1/jobs", headers=auth, files={"mesh": ("m.glb", b"glTF")},
+                    data={"options": '{"max_joints": 16, "sequence_bones": 32}'})
+    assert r.status_code == 422 and r.headers["content-type"] == "application/problem+json"
+    assert r.json()["field"] == "options.sequence_bones" and "max_joints" in r.json()["detail"]
+
+
 def test_the_options_part_is_documented_as_json_of_job_options(client):
     spec = client.get("/openapi.json").json()
     body = spec["paths"]["/api/v1/jobs"]["post"]["requestBody"]["content"]["multipart/form-data"]

@@ -215,6 +215,12 @@ def test_bad_uploads_show_the_servers_message_inline(page, dashboard_server, tmp
     fps = page.wait_for_selector("#opt-fps-error:not([hidden])")
     assert "240" in fps.inner_text()
     assert page.locator("#mesh-error").is_hidden()  # the earlier message is cleared
+    page.fill("#opt-fps", "")
+    page.fill("#opt-max-joints", "16")
+    page.fill("#opt-sequence-bones", "32")  # a fixed bone count above the cap
+    page.click("#submit-job")
+    bones = page.wait_for_selector("#opt-sequence-bones-error:not([hidden])")
+    assert "max_joints" in bones.inner_text()
     assert page.url.endswith("#/new")  # nothing was submitted
     assert [e for e in page.console_errors if "status of 422" not in e] == []  # Chromium logs the refused uploads
 

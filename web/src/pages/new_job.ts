@@ -45,6 +45,7 @@ export function newJobPage(root: HTMLElement): () => void {
   const skeleton = select("opt-skeleton", "options.skeleton", [["auto", "auto (humanoid fit, else geometric)"], ["geometric", "geometric (any creature)"],
     ["humanoid", "humanoid template"], ["keep", "keep the input's skeleton"]], "auto");
   const maxJoints = h("input", { type: "number", id: "opt-max-joints", "data-field": "options.max_joints", value: "64", min: "2", max: "256" });
+  const sequenceBones = h("input", { type: "number", id: "opt-sequence-bones", "data-field": "options.sequence_bones", placeholder: "chosen", min: "2", max: "256" });
   const skinning = select("opt-skinning", "options.skinning", [["auto", "auto (best score)"], ["geodesic", "geodesic voxel binding"], ["heat", "heat diffusion"]], "auto");
   const maxInfluences = select("opt-max-influences", "options.max_influences", [["4", "4 (game engines)"], ["8", "8 (film)"]], "4");
   const smooth = h("input", { type: "number", id: "opt-smooth", "data-field": "options.smooth_iterations", value: "2", min: "0", max: "50" });
@@ -71,6 +72,7 @@ export function newJobPage(root: HTMLElement): () => void {
     h("div", { class: "grid2", style: "grid-column:1 / -1" }, mesh.el, motion.el),
     h("fieldset", {}, h("legend", {}, "Skeleton"),
       field("Method", skeleton), field("Max joints", maxJoints),
+      field("Bones of a mesh sequence", sequenceBones, "rigs from motion: exactly this many; empty = chosen, up to max joints"),
       field("Units", units, "auto guesses from the size"), field("Up axis", upAxis)),
     h("fieldset", {}, h("legend", {}, "Skinning"),
       field("Method", skinning), field("Max influences", maxInfluences), field("Smoothing passes", smooth),
@@ -115,6 +117,7 @@ export function newJobPage(root: HTMLElement): () => void {
     const options: JobOptionsInput = {
       skeleton: skeleton.value as JobOptionsInput["skeleton"],
       max_joints: maxJoints.valueAsNumber,
+      sequence_bones: sequenceBones.value === "" ? null : sequenceBones.valueAsNumber,
       units: units.value as JobOptionsInput["units"],
       up_axis: (upAxis.value || null) as JobOptionsInput["up_axis"],
       skinning: skinning.value as JobOptionsInput["skinning"],
