@@ -31,7 +31,8 @@ def write_skeleton_card(weights: Path, summary: dict, data_summary: dict, data_c
         f"- steps {train['steps']}, batch {train['batch']} sequences × {train['points']} points, AdamW lr {train['lr']} (one-cycle), "
         f"next-token cross-entropy with coordinate targets spread over ±{train['coord_sigma']:g} bins (Gaussian σ), seed {train['seed']}",
         f"- each step squashes every sample along x, y and z by random factors in [{1 - train.get('axis_scale', 0.0):g}, 1] "
-        "(points, normals and joint coordinates alike)" if train.get("axis_scale") else "- no per-step squashing",
+        "(points, normals and joint coordinates alike), then scales it back to its longest extent, as inference "
+        "normalises every mesh" if train.get("axis_scale") else "- no per-step squashing",
         f"- network: {json.dumps(train['model'])}; {weights.stat().st_size / 1e6:.2f} MB",
         hardware_line(summary),
         f"- best val state at step {summary['best_step']} (by val next-token NLL)",

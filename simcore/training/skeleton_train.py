@@ -92,7 +92,7 @@ def token_axes(slots: torch.Tensor) -> torch.Tensor:
 
 
 def squashed(sample: LoadedSample, factors: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
-    """(points, tokens) of `sample` scaled by `factors` (3,) ≤ 1 along x, y, z about the token frame's centre:
+    """(points, tokens) of `sample` scaled by `factors` (3,) along x, y, z about the token frame's centre:
     positions times the factors, normals by the inverse (then unit length), coordinate bins re-quantised."""
     f = torch.from_numpy(np.asarray(factors, np.float32))
     normals = sample.points[:, 3:] / f
@@ -103,11 +103,20 @@ def squashed(sample: LoadedSample, factors: np.ndarray) -> tuple[torch.Tensor, t
     return points, torch.where(coord, moved, sample.tokens)
 
 
+def full_scale(factors: np.ndarray, points: torch.Tensor) -> np.ndarray:
+    """`factors` (3,) rescaled so that the squashed points' longest extent equals the unsquashed one: inference
+    normalises every mesh to span the token cube along its longest side, so a squashed sample must too."""
+    extents = np.ptp(points[:, :3].numpy(), axis=0).astype(np.float64)
+    squashed_longest = float((extents * factors).max())
+    return factors * (float(extents.max()) / squashed_longest) if squashed_longest > 0 else factors
+
+
 def batch_tensors(samples: list[LoadedSample], points: int, rng: np.random.Generator | None,
                   axis_scale: float = 0.0) -> tuple[torch.Tensor, ...]:
     """points (B, N, 6), inputs (B, L-1), slots (B, L-1), targets (B, L-1) padded with <pad>; a random `points`
     of each sample's points with `rng`, the first ones without; with `rng` and `axis_scale`, each sample squashed
-    along each axis by a random factor in [1 - axis_scale, 1] (`squashed`)."""
+    along each axis by a random factor in [1 - axis_scale, 1], then scaled back to its longest extent (`squashed`,
+    `full_scale`)."""
     length = max(len(s.tokens) for s in samples)
     cloud, inputs, slots, targets = [], [], [], []
     for s in samples:
@@ -115,7 +124,7 @@ def batch_tensors(samples: list[LoadedSample], points: int, rng: np.random.Gener
         rows = torch.from_numpy(rng.choice(n, size=min(points, n), replace=False)) if rng is not None else torch.arange(min(points, n))
         pts, tokens = s.points, s.tokens
         if rng is not None and axis_scale > 0:
-            pts, tokens = squashed(s, rng.uniform(1.0 - axis_scale, 1.0, 3))
+            pts, tokens = squashed(s, full_scale(rng.uniform(1.0 - axis_scale, 1.0, 3), s.points))
         cloud.append(pts[rows])
         padded = F.pad(tokens, (0, length - len(tokens)), value=PAD)
         inputs.append(padded[:-1])

@@ -19,7 +19,7 @@ from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 from simcore.training.sample_cache import save_sample
 from simcore.training.skeleton_dataset import make_skeleton_sample, upright_turned
-from simcore.training.skeleton_train import LoadedSample, SkeletonTrainConfig, squashed, train_skeleton
+from simcore.training.skeleton_train import LoadedSample, SkeletonTrainConfig, full_scale, squashed, train_skeleton
 from simcore.training.skin_samples import normalised, variants
 from tests.simcore.training.creatures import capsule_dog
 
@@ -118,3 +118,12 @@ def test_stacked_joints_merge_into_their_parent_and_keep_their_children() -> Non
     merged = without_stacked(chain, 0.01)
     assert merged.names == ["root", "a", "tip", "side"]
     assert merged.parents.tolist() == [-1, 0, 1, 1]
+
+
+def test_full_scale_keeps_the_longest_extent_of_a_squashed_sample() -> None:
+    cloud = torch.from_numpy(np.random.default_rng(1).uniform(-1, 1, (200, 6)) * [1.0, 0.5, 0.25, 1, 1, 1])
+    extents = np.ptp(cloud[:, :3].numpy(), axis=0)
+    factors = full_scale(np.array([0.6, 0.9, 1.0]), cloud)  # x, the longest side, squashed most
+    np.testing.assert_allclose((extents * factors).max(), extents.max())
+    np.testing.assert_allclose(factors / factors[0], [1.0, 1.5, 1 / 0.6])  # the shape's proportions still change
+    np.testing.assert_allclose(full_scale(np.array([1.0, 0.7, 0.8]), cloud), [1.0, 0.7, 0.8])  # longest kept
