@@ -67,8 +67,10 @@ class JobOptions(_Strict):
     )
     max_joints: int = Field(64, ge=2, le=256, description="the most joints a predicted skeleton may have")
     sequence_bones: int | None = Field(
-        None, ge=2, le=256, description="mesh sequences: exactly this many joints, every one a bone read off the "
-                                        "motion (at most max_joints); default: the count is chosen, up to max_joints")
+        None, ge=2, le=256, description="mesh sequences: the bone count to fit instead of a chosen one (at most "
+                                        "max_joints), and the most joints the rig gets: bones that move alike merge, "
+                                        "joints for parts the motion never bends fill up to it (report.json motion_rig "
+                                        "counts both); default: the count is chosen, up to max_joints")
     up_axis: Axis | None = Field(None, description="override the input's up axis (glTF input is +Y up)")
     forward_axis: Axis | None = Field(None, description="override the facing direction used by the humanoid fit")
     units: Literal["auto", "m", "cm", "mm", "in"] = "auto"

@@ -1,8 +1,8 @@
 """Pipeline stage `skeleton` for mesh-sequence uploads: skeleton, weights and animation recovered from motion.
 
 It stands in for the skeleton, skin and motion stages (simcore.pipeline plans it when ingest found a sequence and
-options.skeleton is "auto" or "from_motion"). Options used: `sequence_bones` (a fixed joint count, all of them motion
-bones), `max_joints` (the cap of the automatic count), `max_influences`, `motion.fps` (resampling rate of a morph
+options.skeleton is "auto" or "from_motion"). Options used: `sequence_bones` (the bone count to fit, and the joint
+cap), `max_joints` (the cap of the chosen count), `max_influences`, `motion.fps` (resampling rate of a morph
 animation, read at ingest).
 Writes skeleton.json and report["skeleton"], report["skinning"], report["motion_rig"] (per-frame RMSE of the rig
 and of free Dem Bones at the same count, in units of the first frame's bounding-box diagonal, bone count, times).
@@ -24,8 +24,8 @@ if TYPE_CHECKING:
 
 
 def params_for(options: JobOptions) -> MotionRigParams:
-    """The solver parameters a job's options ask for: exactly `sequence_bones` joints, every one a bone read off the
-    motion, when given; else a count chosen up to `max_joints`, shape joints included."""
+    """The solver parameters a job's options ask for: a fit of `sequence_bones` bones with at most that many joints in
+    all, when given; else a count chosen up to `max_joints`, shape joints included."""
     fixed = options.sequence_bones
     return MotionRigParams(max_influences=int(options.max_influences), bones=fixed,
                            max_bones=options.max_joints if fixed is None else fixed)

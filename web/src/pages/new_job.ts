@@ -72,7 +72,7 @@ export function newJobPage(root: HTMLElement): () => void {
     h("div", { class: "grid2", style: "grid-column:1 / -1" }, mesh.el, motion.el),
     h("fieldset", {}, h("legend", {}, "Skeleton"),
       field("Method", skeleton), field("Max joints", maxJoints),
-      field("Bones of a mesh sequence", sequenceBones, "rigs from motion: exactly this many; empty = chosen, up to max joints"),
+      field("Bones of a mesh sequence", sequenceBones, "rigs from motion: fit this many bones (bones that move alike merge); empty = chosen, up to max joints"),
       field("Units", units, "auto guesses from the size"), field("Up axis", upAxis)),
     h("fieldset", {}, h("legend", {}, "Skinning"),
       field("Method", skinning), field("Max influences", maxInfluences), field("Smoothing passes", smooth),
