@@ -9,7 +9,8 @@ MIN_WEIGHT = 1e-6  # weights summing below this give the identity fit
 
 def rotation_from_covariance(cov: np.ndarray) -> np.ndarray:
     """Proper rotations R (..., 3, 3) maximising trace(Rᵀ cov) for cross-covariances cov = Σ target sourceᵀ
-    (..., 3, 3): the least-squares rotation taking source points onto target points, reflections excluded."""
+    (..., 3, 3): the least-squares rotation taking source points onto target points, reflections excluded. Given
+    any matrices instead (a joint's world frame with scale or a mirror), it is their nearest proper rotation."""
     u, _, vt = np.linalg.svd(cov)
     flip = np.sign(np.linalg.det(u @ vt))
     u[..., :, 2] *= np.where(flip == 0, 1.0, flip)[..., None]

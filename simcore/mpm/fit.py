@@ -106,7 +106,7 @@ class FitScene:
     driver_particles: np.ndarray | None = None  # (D, EMBED) particles each driving point is embedded in
     joint_motion: tuple[np.ndarray, np.ndarray] | None = None  # per-frame joint rotations (T, M, 3, 3), translations (T, M, 3)
     particle_weights: np.ndarray | None = None  # (N, M) the particles' weights over the joints of joint_motion
-    grid_note: str | None = None  # why the grid is coarser than asked (simcore.mpm.sampling.sample_on_grid)
+    grid_note: str | None = None  # why the grid differs from the one asked for (simcore.mpm.sampling.sample_on_grid)
 
 
 @dataclass
@@ -127,8 +127,8 @@ def prepare_scene(targets: np.ndarray, faces: np.ndarray, fps: float, config: Fi
     """Sample frame 0, seed prototypes and drivers, initialise velocities. targets: (T, V, 3) float, faces: (F, 3)."""
     targets = np.asarray(targets, np.float64)
     lo, hi = targets.min(axis=1), targets.max(axis=1)
-    placed = sample_on_grid(targets[0], faces, float((hi - lo).max()), int(np.ceil(config.grid / 4) * 4),
-                            2 * (BOUND + MARGIN_NODES), max_particles=config.max_particles, seed=config.seed)
+    placed = sample_on_grid(targets[0], faces, float((hi - lo).max()), config.grid, 2 * (BOUND + MARGIN_NODES),
+                            max_particles=config.max_particles, seed=config.seed)
     sample, grid, dx = placed.sample, placed.grid, placed.dx
     material = PRESETS[config.preset]
     protos = seed_prototypes(sample.positions, config.prototypes, material, sample.volume, seed=config.seed)

@@ -5,8 +5,8 @@ twice the resolution finds them strictly inside (not in its surface shell); surf
 output vertex is a particle. Over budget, interior and surface samples are thinned first; only when the
 vertices alone exceed half the budget are vertices thinned too (those then follow their nearest simulated
 vertices, see `vertex_particles`). Particles are ordered by voxel so neighbours sit together in memory.
-`sample_on_grid` samples for a simulation grid and coarsens that grid when the budget would leave too few
-particles in each of its cells to hold the solid together.
+`sample_on_grid` samples for a simulation grid (rounded up to whole blocks of the kernels' sparse grid) and coarsens
+that grid when the budget would leave too few particles in each of its cells to hold the solid together.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from scipy.spatial import cKDTree
 
 from simcore.geometry.referenced import referenced_mesh
 from simcore.geometry.voxelize import solid_voxels, surface_samples
+from simcore.mpm.kernels import BLOCK
 
 # Fewest particles per grid cell of the solid that a simulation keeps: MPM's usual fill is 8 (two per axis);
 # below about half that, cells between particles get no mass and the continuum tears into clumps.
@@ -119,8 +120,8 @@ def nearest_rows(sources: np.ndarray, values: sp.spmatrix | np.ndarray, targets:
 
 @dataclass(frozen=True)
 class GridSample:
-    """A particle sample for a simulation grid: the sample, the grid (nodes per axis, a multiple of 4) and its
-    spacing dx (metres), particles per cell of the solid, and a note when the grid was coarsened for the budget."""
+    """A particle sample for a simulation grid: the sample, the grid (nodes per axis, a multiple of BLOCK) and its
+    spacing dx (metres), particles per cell of the solid, and a note when the grid differs from the one asked for."""
 
     sample: ParticleSample
     grid: int
@@ -137,23 +138,26 @@ def sample_on_grid(vertices: np.ndarray, faces: np.ndarray, extent: float, grid:
                    max_particles: int | None, seed: int = 0) -> GridSample:
     """Particles half a cell apart for a `grid`-node domain whose `grid - pad` inner cells span `extent` metres.
 
+    `grid` is first rounded up to a multiple of BLOCK (the kernels' sparse grid is made of BLOCK³ node blocks).
     Under a budget the particle count is fixed, so particles per cell fall with the cube of the cell size: when
-    they would be under MIN_PARTICLES_PER_CELL, the grid is coarsened (to a multiple of 4, at least
-    SMALLEST_GRID) until they are not, and sampled again at the coarser spacing; the note says so.
+    they would be under MIN_PARTICLES_PER_CELL, the grid is coarsened (to a multiple of BLOCK, at least
+    SMALLEST_GRID) until they are not, and sampled again at the coarser spacing. The note says what changed.
     """
+    asked, grid = grid, BLOCK * -(-grid // BLOCK)
+    rounded = f"grid rounded up from {asked} to {grid} (multiple of the {BLOCK}³ block)" if grid != asked else None
     dx = extent / (grid - pad)
     sample = sample_volume(vertices, faces, 0.5 * dx, max_particles=max_particles, seed=seed)
     per_cell = _per_cell(sample, dx)
     if per_cell >= MIN_PARTICLES_PER_CELL:
-        return GridSample(sample, grid, dx, per_cell)
+        return GridSample(sample, grid, dx, per_cell, rounded)
     wanted = dx * (MIN_PARTICLES_PER_CELL / per_cell) ** (1.0 / 3.0)
-    coarse = max(4 * int((extent / wanted + pad) // 4), SMALLEST_GRID)
+    coarse = max(BLOCK * int((extent / wanted + pad) // BLOCK), SMALLEST_GRID)
     if coarse >= grid:
-        return GridSample(sample, grid, dx, per_cell)
+        return GridSample(sample, grid, dx, per_cell, rounded)
     coarse_dx = extent / (coarse - pad)
     coarse_sample = sample_volume(vertices, faces, 0.5 * coarse_dx, max_particles=max_particles, seed=seed)
     coarse_per_cell = _per_cell(coarse_sample, coarse_dx)
     note = (f"grid lowered from {grid} to {coarse}: {sample.count} particles (the budget) fill a cell of the solid "
             f"{per_cell:.1f} times at {grid}, {coarse_per_cell:.1f} at {coarse} (at least {MIN_PARTICLES_PER_CELL:g} "
             "hold it together); raise the particle budget to keep the finer grid")
-    return GridSample(coarse_sample, coarse, coarse_dx, coarse_per_cell, note)
+    return GridSample(coarse_sample, coarse, coarse_dx, coarse_per_cell, "; ".join(filter(None, [rounded, note])))

@@ -200,9 +200,6 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
                 opts: RefineOptions, *, device: str, max_particles: int, seed: int = 0) -> CharacterScene:
     """Sample, parameterise and schedule the simulation of `vertices` (V, 3) bind pose driven by `animation`."""
     info: dict[str, Any] = {}
-    grid = int(np.ceil(opts.grid / 4) * 4)
-    if grid != opts.grid:
-        info["grid_note"] = f"grid rounded up from {opts.grid} to {grid} (multiple of the 4³ block)"
     clip_world = animation_world_transforms(skeleton, animation)
     bind_world = bind_matrices(skeleton)
     inv_bind = np.linalg.inv(bind_world)
@@ -220,10 +217,11 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, wei
     box = np.concatenate([np.stack([surface.min(0), surface.max(0)])[None], _boxes(surface, w_used, world, inv_bind)])
     extent = float((box[:, 1] - box[:, 0]).max())
     height = float((box[0, 1] - box[0, 0]).max())
-    placed = sample_on_grid(vertices, faces, extent, grid, 2 * (BOUND + MARGIN_NODES), max_particles=max_particles, seed=seed)
+    placed = sample_on_grid(vertices, faces, extent, opts.grid, 2 * (BOUND + MARGIN_NODES), max_particles=max_particles,
+                            seed=seed)
     sample, grid, dx = placed.sample, placed.grid, placed.dx
     if placed.note:
-        info["grid_note"] = "; ".join(filter(None, [info.get("grid_note"), placed.note]))
+        info["grid_note"] = placed.note
     material = PRESETS[opts.preset]
     protos = seed_prototypes(sample.positions, opts.prototypes, material, sample.volume, seed=seed)
     particle_w = nearest_rows(vertices[used], w_used, sample.positions)

@@ -41,7 +41,7 @@ class SkeletonTrainConfig:
     lr: float = 1e-3
     weight_decay: float = 0.01
     coord_sigma: float = 1.0
-    axis_scale: float = 0.0  # each step squashes a sample along x, y and z by factors drawn from [1 - this, 1]
+    axis_scale: float = 0.0  # each step squashes a sample along x, y, z by factors from [1 - this, 1] (`full_scale`)
     val_every: int = 250
     decode_every: int = 1000
     decode_val: int = 6

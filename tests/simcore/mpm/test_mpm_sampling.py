@@ -40,3 +40,11 @@ def test_a_budget_too_small_for_the_grid_coarsens_it(capsule):
     # the grid is coarsened no further than needed: one step finer would be under the minimum
     finer = sample_on_grid(vertices, faces, extent, tight.grid + 4, 14, max_particles=1000, seed=2)
     assert finer.grid < tight.grid + 4
+
+
+def test_a_grid_off_the_block_size_is_rounded_up_and_says_so(capsule):
+    vertices, faces, *_ = capsule()
+    extent = float(np.ptp(vertices, axis=0).max())
+    placed = sample_on_grid(vertices, faces, extent, 30, 14, max_particles=None, seed=2)
+    assert placed.grid == 32 and placed.dx == extent / (32 - 14)
+    assert placed.note == "grid rounded up from 30 to 32 (multiple of the 4³ block)"
