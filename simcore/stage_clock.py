@@ -3,7 +3,9 @@
 Checked wherever the stage reports progress or checks for cancel; in the main thread a SIGALRM timer also
 interrupts a stage that never checks (between Python bytecodes: a long native call ends first). A SIGALRM
 timer already armed (e.g. pytest-timeout's) keeps its deadline and handler: it fires if it is due first, and is
-re-armed for its remaining time after the stage.
+re-armed for its remaining time after the stage. Native code the alarm interrupts may turn the StageTimeout into
+an error of its own (numpy raises TypeError from a comparison it was inside): once the alarm has fired, whatever
+leaves the stage leaves as the StageTimeout.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ class StageClock:
         self._previous: Any = None  # the SIGALRM handler before this stage's, as signal.signal returns it
         self._previous_left = 0.0  # seconds the timer armed before this stage had left when it began (0: none)
         self._armed = False
+        self._fired = False  # the alarm raised the stage's StageTimeout
 
     def error(self) -> StageTimeout:
         return StageTimeout(f"the {self.stage} stage ran past its time budget of {self.seconds:g} s "
@@ -37,6 +40,7 @@ class StageClock:
 
     def _alarm(self, signum: int, frame: FrameType | None) -> None:
         if time.monotonic() - self.started >= self.seconds:
+            self._fired = True
             raise self.error()
         self._previous_left = 0.0  # the earlier timer was due first: it has fired
         signal.setitimer(signal.ITIMER_REAL, self.seconds - (time.monotonic() - self.started))
@@ -44,7 +48,7 @@ class StageClock:
             self._previous(signum, frame)
 
     def __enter__(self) -> StageClock:
-        self.started = time.monotonic()
+        self.started, self._fired = time.monotonic(), False
         if self.seconds and threading.current_thread() is threading.main_thread():
             self._previous_left = signal.getitimer(signal.ITIMER_REAL)[0]
             self._previous = signal.signal(signal.SIGALRM, self._alarm)
@@ -61,3 +65,5 @@ class StageClock:
                 left = self._previous_left - (time.monotonic() - self.started)
                 signal.setitimer(signal.ITIMER_REAL, max(left, 1e-3))  # overdue: fire at once
             self._armed = False
+        if self._fired and exc is not None and not isinstance(exc, StageTimeout):
+            raise self.error() from exc

@@ -63,6 +63,21 @@ def test_a_loop_that_never_checks_is_interrupted_in_the_main_thread_within_its_b
     assert time.monotonic() - started < 2.0
 
 
+def test_a_timeout_that_native_code_turned_into_another_error_still_leaves_as_the_timeout():
+    with pytest.raises(StageTimeout) as caught, StageClock("skeleton", 0.05):
+        try:
+            while True:
+                pass
+        except StageTimeout:
+            raise TypeError("Cannot compare structured arrays") from None  # as numpy's np.unique did mid-compare
+    assert isinstance(caught.value.__cause__, TypeError)
+
+
+def test_an_error_of_the_stage_itself_is_left_as_it_is():
+    with pytest.raises(ValueError), StageClock("skeleton", 5.0):
+        raise ValueError("the stage's own")
+
+
 def test_the_clock_restores_an_alarm_armed_before_the_stage_and_its_handler():
     import signal
 
