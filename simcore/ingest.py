@@ -14,6 +14,7 @@ from simcore.geometry.mesh_stats import mesh_stats
 from simcore.geometry.parts import bulk_size, surface_parts
 from simcore.geometry.referenced import referenced_mesh
 from simcore.geometry.similarity import rotation_from_covariance
+from simcore.io.bind_pose import bind_pose_worlds
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset, rig_rest_matrices
 from simcore.io.gltf_static import bake_static_glb, static_arrays
@@ -90,16 +91,22 @@ def _check(vertices: np.ndarray, faces: np.ndarray, max_vertices: int) -> None:
         raise InvalidInput("a face refers to a vertex that does not exist", code="index_out_of_range", field="mesh")
 
 
-def _source_rig(doc: GltfDocument, conversion: np.ndarray, vertices: np.ndarray) -> RiggedAsset | None:
-    """The upload's own skin in our frame (rest pose), weights re-indexed to our vertex order."""
+def _bind_pose(doc: GltfDocument) -> tuple[RiggedAsset | None, np.ndarray]:
+    """(the upload's rig, or None without a skinned mesh; every node's world transform with that rig at its
+    bind pose, or at the nodes' rest pose without one). The bind pose is what we rig (simcore.io.bind_pose)."""
+    if not any("skin" in n for n in doc.items("nodes")):
+        return None, doc.world_matrices()
+    rig = read_rigged_asset(doc)
+    return rig, bind_pose_worlds(doc, rig)
+
+
+def _source_rig(doc: GltfDocument, rig: RiggedAsset, world: np.ndarray, conversion: np.ndarray, vertices: np.ndarray) -> RiggedAsset:
+    """The upload's own skin `rig` in our frame at the pose `world` (N, 4, 4) holds, weights re-indexed to our
+    vertex order."""
     from scipy.spatial import cKDTree
 
-    if not any("skin" in n for n in doc.items("nodes")):
-        return None
-    rig = read_rigged_asset(doc)
-    world = doc.world_matrices()
     joints_world = conversion @ world[rig.joint_nodes]
-    rest_skin = rig_rest_matrices(doc, rig)  # in our joint order, every skin of the file
+    rest_skin = rig_rest_matrices(doc, rig, world)  # in our joint order, every skin of the file
     rig_vertices = np.einsum("vj,jab->vab", rig.weights.toarray(), conversion @ rest_skin)
     rig_vertices = np.einsum("vab,vb->va", rig_vertices[:, :3, :3], rig.vertices) + rig_vertices[:, :3, 3]
     dist, index = cKDTree(rig_vertices).query(vertices)
@@ -124,8 +131,9 @@ def ingest(data: bytes, fmt: str, *, up_axis: str | None = None, units: str = "a
     if fmt == "zip":  # a .gltf with its .bin and images, packed into one GLB so its textures are kept
         data, fmt = glb_from_zip(data), "glb"
     doc = GltfDocument.from_bytes(data) if fmt in ("glb", "gltf") else None
+    rig, world = _bind_pose(doc) if doc is not None else (None, None)
     if doc is not None:
-        raw_vertices, raw_faces = bake_static_glb(doc, np.eye(4))[1:]
+        raw_vertices, raw_faces = bake_static_glb(doc, np.eye(4), world)[1:]
     else:
         raw_vertices, raw_faces, geoms = _load_other(data, fmt)
     _check(raw_vertices, raw_faces, max_vertices)
@@ -143,7 +151,7 @@ def ingest(data: bytes, fmt: str, *, up_axis: str | None = None, units: str = "a
         warnings.append(f"no up axis given; guessed +{up.upper()} up for a {fmt.upper()} file and rotated it to +Y")
     conversion = conversion_matrix(up, UNIT_SCALE[unit])
     if doc is not None:
-        glb, vertices, faces = bake_static_glb(doc, conversion)
+        glb, vertices, faces = bake_static_glb(doc, conversion, world)
     else:
         import trimesh
 
@@ -154,8 +162,9 @@ def ingest(data: bytes, fmt: str, *, up_axis: str | None = None, units: str = "a
     stats = mesh_stats(vertices, faces)
     stats.update(format=fmt, units_guess=unit_guess, units_applied=unit, scale_to_metres=UNIT_SCALE[unit],
                  up_axis_guess=up_guess, up_axis_applied=up)
-    rig = _source_rig(doc, conversion, vertices) if doc is not None else None
     if rig is not None:
+        assert doc is not None and world is not None, "a rig comes from a glTF document"
+        rig = _source_rig(doc, rig, world, conversion, vertices)
         stats["input_skeleton_joints"] = rig.skeleton.num_joints
     if doc is not None and doc.dropped_images:
         stats["external_images_dropped"] = list(doc.dropped_images)

@@ -39,11 +39,12 @@ from simcore.errors import SimcoreError
 from simcore.evaluation.assets import asset_files, rigged_assets
 from simcore.gate.measures import deformation_series, lbs_blocks, model_size
 from simcore.geometry.laplacian import edges
+from simcore.io.bind_pose import bind_placement
 from simcore.io.bvh import parse_bvh
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset
 from simcore.motion.clip_frame import transform_clip
-from simcore.motion.gltf_clips import bind_placement, read_gltf_clip
+from simcore.motion.gltf_clips import read_gltf_clip
 from simcore.motion.quality import foot_sliding, skin_matrices
 from simcore.motion.retarget import retarget
 from simcore.motion.types import MotionClip

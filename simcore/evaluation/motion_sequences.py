@@ -13,10 +13,11 @@ import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
 from simcore.evaluation.motion_eval import world_bind
+from simcore.io.bind_pose import bind_placement
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, used_joints
 from simcore.metrics.skeleton import used_skeleton
-from simcore.motion.gltf_clips import bind_placement, read_gltf_clip
+from simcore.motion.gltf_clips import read_gltf_clip
 from simcore.motion.quality import skin_matrices
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.lbs import linear_blend

@@ -117,7 +117,8 @@ def clip_skin_matrices(doc: GltfDocument, asset: RiggedAsset) -> np.ndarray | No
     Joint matrix (glTF): world(joint, t) · inverseBindMatrix, taken back into bind space by the inverse of
     where the rest pose places the bind pose, then conjugated into the unit cube of the bind vertices.
     """
-    from simcore.motion.gltf_clips import bind_placement, clip_time_range, sample_node_worlds
+    from simcore.io.bind_pose import bind_placement
+    from simcore.motion.gltf_clips import clip_time_range, sample_node_worlds
 
     anims = doc.items("animations")
     if not anims:

@@ -388,10 +388,12 @@ def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
                        joints[order], bind[order], skin_order[0], tuple(skin_order))
 
 
-def rig_rest_matrices(doc: GltfDocument, asset: RiggedAsset) -> np.ndarray:
-    """(J, 4, 4) joint world at the nodes' rest pose @ inverse bind, in the asset's joint order: the glTF joint
-    matrices that place the asset's bind-space vertices where the file shows them."""
-    return doc.world_matrices()[asset.joint_nodes] @ np.linalg.inv(asset.bind_matrices)
+def rig_rest_matrices(doc: GltfDocument, asset: RiggedAsset, world: np.ndarray | None = None) -> np.ndarray:
+    """(J, 4, 4) joint world @ inverse bind, in the asset's joint order: the glTF joint matrices that place the
+    asset's bind-space vertices where the file shows them (world None: the nodes' rest pose), or where the
+    node world transforms `world` (N, 4, 4) put them."""
+    world = doc.world_matrices() if world is None else world
+    return world[asset.joint_nodes] @ np.linalg.inv(asset.bind_matrices)
 
 
 def used_joints(skeleton: Skeleton, weights: sp.csr_matrix, eps: float = 1e-6) -> np.ndarray:

@@ -1,8 +1,9 @@
-"""Bake an uploaded glTF into our static mesh.glb: every mesh instance in world space at the skin's rest
-pose, converted to metres / +Y up, with its UVs, normals, vertex colours, materials and textures.
+"""Bake an uploaded glTF into our static mesh.glb: every mesh instance in world space in one pose of its
+nodes (ingest passes the skin's bind pose, simcore.io.bind_pose; by default the nodes' rest pose), converted to
+metres / +Y up, with its UVs, normals, vertex colours, materials and textures.
 
-Skinned primitives are posed as viewers show them (Σ w · world(joint) · inverseBind), not by the mesh
-node's transform, which glTF says to ignore for skinned meshes.
+Skinned primitives are posed by their skin (Σ w · world(joint) · inverseBind), not by the mesh node's
+transform, which glTF says to ignore for skinned meshes.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ KEPT_ATTRIBUTES = ("POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", 
 
 
 def skin_rest_matrices(doc: GltfDocument, skin_index: int, world: np.ndarray) -> np.ndarray:
-    """(J, 4, 4) world(joint) @ inverseBind of a skin at the nodes' rest pose."""
+    """(J, 4, 4) world(joint) @ inverseBind of a skin, `world` (N, 4, 4) holding every node's world transform."""
     skin = doc.items("skins")[skin_index]
     joints = np.asarray(skin.get("joints", []), dtype=np.int64)
     if "inverseBindMatrices" in skin:
@@ -33,7 +34,7 @@ def skin_rest_matrices(doc: GltfDocument, skin_index: int, world: np.ndarray) ->
 
 
 def _vertex_matrices(doc: GltfDocument, node: dict, prim: dict, node_world: np.ndarray, count: int, world: np.ndarray) -> np.ndarray:
-    """(count, 4, 4) per-vertex rest-pose transform (the node's world, or the blended skin matrices)."""
+    """(count, 4, 4) per-vertex transform in the pose `world` holds (the node's world, or the blended skin matrices)."""
     attrs = prim["attributes"]
     if "skin" not in node or "JOINTS_0" not in attrs or "WEIGHTS_0" not in attrs:
         return np.broadcast_to(node_world, (count, 4, 4))
@@ -64,17 +65,18 @@ def _copy_images(doc: GltfDocument, builder: GlbBuilder) -> None:
             image["bufferView"] = builder.add_view(blob)
 
 
-def bake_static_glb(doc: GltfDocument, conversion: np.ndarray) -> tuple[bytes, np.ndarray, np.ndarray]:
+def bake_static_glb(doc: GltfDocument, conversion: np.ndarray, world: np.ndarray | None = None) -> tuple[bytes, np.ndarray, np.ndarray]:
     """Returns (mesh.glb bytes, vertices (V, 3) float64, faces (F, 3) int64) in the converted frame.
 
-    conversion: (4, 4) similarity transform applied after the rest pose (units and up axis).
+    conversion: (4, 4) similarity transform applied after the pose (units and up axis).
+    world: (N, 4, 4) every node's world transform in the pose to bake (simcore.io.bind_pose); None: the rest pose.
     """
     base = {k: doc.json[k] for k in ("materials", "textures", "images", "samplers") if k in doc.json}
     base["asset"] = {"version": "2.0", "generator": "RigForge ingest"}
     builder = GlbBuilder(base)
     builder.json["bufferViews"] = []
     _copy_images(doc, builder)
-    world = doc.world_matrices()
+    world = doc.world_matrices() if world is None else world
     scene_nodes, all_verts, all_faces, offset = [], [], [], 0
     n_materials = len(doc.json.get("materials", []))
     for n, node in enumerate(doc.items("nodes")):

@@ -13,6 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput
 from simcore.geometry.similarity import rotation_from_covariance
+from simcore.io.bind_pose import bind_placement
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, read_rigged_asset
 from simcore.motion.timing import sample_track
@@ -66,16 +67,6 @@ def _static_trs(node: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         np.asarray(node.get("rotation", [0, 0, 0, 1]), dtype=np.float64),
         np.asarray(node.get("scale", [1, 1, 1]), dtype=np.float64),
     )
-
-
-def bind_placement(doc: GltfDocument, asset: RiggedAsset) -> np.ndarray:
-    """(4, 4) world-from-bind-space matrix: the root joint's rest world times its inverse bind matrix.
-
-    glTF ignores the skinned mesh node's transform (world = joint world · IBM · v), so this is where the
-    bind pose appears at the nodes' rest pose; it may include a unit scale or a Z-up→Y-up rotation.
-    """
-    root = int(np.flatnonzero(asset.skeleton.parents < 0)[0])
-    return doc.world_matrices()[asset.joint_nodes[root]] @ np.linalg.inv(asset.bind_matrices[root])
 
 
 def _ordered(asset: RiggedAsset) -> tuple[Skeleton, np.ndarray, np.ndarray]:
