@@ -182,3 +182,13 @@ def test_a_horse_read_tail_up_is_not_taken_for_a_biped(dev_assets):
     assert fit.skeleton is None and CONFIDENT <= fit.report["confidence"] < SIDEWAYS_CONFIDENT
     assert fit.report["up"] == "-z" and "read -z up" in fit.report["reason"]
     assert fit_humanoid(0.01 * vertices, faces, up_axis="-z").skeleton is not None  # an explicit up is trusted
+
+
+def test_hands_straight_above_each_other_give_no_facing_instead_of_nan() -> None:
+    from simcore.skeleton.humanoid import _Biped, _facing, _NotBiped, _Tree
+
+    up = np.array([0.0, 1.0, 0.0])
+    tree = _Tree(np.zeros((1, 3)), np.ones(1), [[]], np.arange(1))
+    biped = _Biped(up, 1.0, {}, 0.0, 1.0, {0: -1}, 0, (0, 0), 0, (0, 0), (0, 0))
+    with pytest.raises(_NotBiped, match="along the up axis"):
+        _facing(tree, biped, [], np.zeros(3), None)  # the hands' offset projected off the up axis is nothing
