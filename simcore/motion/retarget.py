@@ -4,7 +4,8 @@ Method (world-space delta transfer):
 1. Map target joints to source joints (`map_joints`: names, else chain structure, or where the bones lie for
    two skeletons of one body; user overrides win) and
    find the quarter turn about +Y that makes the source face the way the target faces. Of several target
-   joints on one chain mapped to one source joint, only the one nearest it bends (`one_pivot_per_source_joint`).
+   joints on one chain mapped to one source joint, only the one nearest it bends (`one_pivot_per_source_joint`;
+   for one body, the target's root keeps its source joint too).
 2. Rest alignment: for each mapped target joint, the rotation A_j that turns its rest bone directions (to
    its nearest mapped descendants) onto the source's rest bone directions. This is what lets a T-pose
    source drive an A-pose target: at the source's rest, the target takes the source's pose. A branching
@@ -128,7 +129,9 @@ def one_pivot_per_source_joint(source: Skeleton, target: Skeleton, mapping: dict
     positions as they are for `same_body` skeletons, else normalised with the source turned to face like the
     target) keeps the mapping; the group's ancestors
     above it that are plain chain links (one child) are unmapped and ride with their parents. Branching joints
-    (a hip) keep their mapping: their other branches need the rotation.
+    (a hip) keep their mapping: their other branches need the rotation. So does the target's root for `same_body`
+    skeletons: it has no parent to ride with, and it is carried rigidly by the source joint it follows (root
+    motion moves it as that joint moves its place), so it cannot bend the chain at the wrong place.
     """
     groups: dict[int, list[int]] = {}
     for t, s in mapping.items():
@@ -145,7 +148,8 @@ def one_pivot_per_source_joint(source: Skeleton, target: Skeleton, mapping: dict
     for s, ts in shared.items():
         keep = min(ts, key=lambda t: float(np.linalg.norm(pt[t] - ps[s])))
         for t in ts:
-            if len(children[t]) == 1 and keep != t and is_at_or_below(target.parents, keep, t):
+            root_of_one_body = same_body and target.parents[t] < 0
+            if len(children[t]) == 1 and keep != t and is_at_or_below(target.parents, keep, t) and not root_of_one_body:
                 del out[t]
     return out
 

@@ -150,3 +150,28 @@ def test_a_joint_between_two_characters_keeps_the_nearest_bones():
     mapping = region_mapping(source, target)
     assert source.names[mapping[1]] == "arm_a" and source.names[mapping[3]] == "arm_b"
     assert source.names[mapping[0]] == "body_a"  # not the scene root both arms meet at
+
+
+def test_a_target_root_sharing_its_source_joint_with_its_child_is_carried_by_it():
+    """Our root and its only child both lie on the source joint that turns (a skeleton built inside the head of a
+    creature whose root sits at its feet): the root must not be dropped as a chain link, or nothing carries it and
+    the flesh it holds stays behind while the head turns. All of ours turns rigidly with the source joint."""
+    source = _strip([0.0, 1.0], "s")
+    target = _strip([0.9, 1.05, 1.5], "t")
+    assert one_pivot_per_source_joint(source, target, {0: 1, 1: 1, 2: 1}, 0, same_body=True) == {0: 1, 1: 1, 2: 1}
+    frames = 2
+    rot = np.tile([0.0, 0.0, 0.0, 1.0], (frames, 2, 1))
+    turn = Rotation.from_rotvec([0.0, 0.0, np.pi / 2])
+    rot[1, 1] = turn.as_quat()
+    anim = JointAnimation(["s0", "s1"], 30.0, rot, np.broadcast_to(kinematics.rest_local_matrices(source)[:, :3, 3], (frames, 2, 3)).copy())
+    clip = MotionClip(source, anim, rest_is_standing=True, source_format="test", shares_bind_pose=True)
+    from simcore.options import MotionOptions
+
+    out = retarget(clip, target, MotionOptions(joint_map={"s1": "t0"}))
+    pivot = np.array([0.0, 1.0, 0.0])
+    expected = pivot + turn.apply(target.positions - pivot)
+    world = _world(target, out.animation)[1]
+    np.testing.assert_allclose(world[:, :3, :3], np.broadcast_to(turn.as_matrix(), (3, 3, 3)), atol=1e-9)
+    # Rigid with the source joint; the floor correction may lift the whole pose, so compare from the root.
+    np.testing.assert_allclose(world[:, :3, 3] - world[0, :3, 3], expected - expected[0], atol=1e-9)
+    assert world[0, 0, 3] == pytest.approx(expected[0, 0], abs=1e-9)  # the root swung out with the head
