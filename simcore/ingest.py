@@ -106,8 +106,8 @@ def _source_rig(doc: GltfDocument, rig: RiggedAsset, world: np.ndarray, conversi
     from scipy.spatial import cKDTree
 
     joints_world = conversion @ world[rig.joint_nodes]
-    rest_skin = rig_rest_matrices(doc, rig, world)  # in our joint order, every skin of the file
-    rig_vertices = np.einsum("vj,jab->vab", rig.weights.toarray(), conversion @ rest_skin)
+    skin = rig_rest_matrices(doc, rig, world)  # in our joint order, every skin of the file
+    rig_vertices = np.einsum("vj,jab->vab", rig.weights.toarray(), conversion @ skin)
     rig_vertices = np.einsum("vab,vb->va", rig_vertices[:, :3, :3], rig.vertices) + rig_vertices[:, :3, 3]
     dist, index = cKDTree(rig_vertices).query(vertices)
     weights = rig.weights[index]  # each of our vertices takes the skin of the nearest skinned vertex

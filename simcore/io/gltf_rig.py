@@ -302,10 +302,9 @@ def _skinned_part(doc: GltfDocument, prim: dict, j: int) -> tuple[np.ndarray, sp
     return v, sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(v), j))
 
 
-def _rigid_joint(doc: GltfDocument, node: int, joints: np.ndarray) -> int | None:
-    """Slot of the joint that carries an unskinned mesh node (itself or its nearest joint ancestor), if any."""
-    slot = {int(n): k for k, n in enumerate(joints)}
-    parents = doc.node_parents()
+def carrying_joint(parents: np.ndarray, slot: dict[int, int], node: int) -> int | None:
+    """The joint that carries node `node` (itself or its nearest joint ancestor), as its value in `slot` (joint
+    node → slot), or None under no joint. parents: (N,) every node's parent node (`GltfDocument.node_parents`)."""
     while node >= 0 and node not in slot:
         node = int(parents[node])
     return slot.get(node)
@@ -345,7 +344,8 @@ def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
     joints, bind = merged.joints, merged.bind
     skeleton = _merged_skeleton(doc, joints, bind)
     j = skeleton.num_joints
-    world = doc.world_matrices()
+    world, node_parents = doc.world_matrices(), doc.node_parents()
+    joint_slots = {int(n): k for k, n in enumerate(joints)}
     verts: list[np.ndarray] = []
     faces: list[np.ndarray] = []
     weights: list[sp.spmatrix] = []
@@ -362,7 +362,7 @@ def read_rigged_asset(doc: GltfDocument) -> RiggedAsset:
                     part = (part[0] @ frame[:3, :3].T + frame[:3, 3], sp.coo_matrix((w.data, (w.row, slots[w.col])), shape=(len(part[0]), j)))
                 parts.append((prim, part))
         elif "skin" not in node:
-            slot = _rigid_joint(doc, index, joints)
+            slot = carrying_joint(node_parents, joint_slots, index)
             if slot is None:
                 continue
             to_bind = bind[slot] @ np.linalg.inv(world[joints[slot]]) @ world[index]

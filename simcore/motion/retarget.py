@@ -148,8 +148,8 @@ def one_pivot_per_source_joint(source: Skeleton, target: Skeleton, mapping: dict
     for s, ts in shared.items():
         keep = min(ts, key=lambda t: float(np.linalg.norm(pt[t] - ps[s])))
         for t in ts:
-            root_of_one_body = same_body and target.parents[t] < 0
-            if len(children[t]) == 1 and keep != t and is_at_or_below(target.parents, keep, t) and not root_of_one_body:
+            carried = same_body and target.parents[t] < 0  # a root of one body: root motion carries it
+            if len(children[t]) == 1 and keep != t and not carried and is_at_or_below(target.parents, keep, t):
                 del out[t]
     return out
 

@@ -230,9 +230,10 @@ def _facing(tree: _Tree, biped: _Biped, leg_paths: list[list[int]], lateral: np.
     """Forward unit vector ⊥ up and how sure we are (0..1): the toes point forward."""
     up = biped.up
     side_normal = np.cross(up, lateral)
-    if np.linalg.norm(side_normal) < 1e-9:  # one hand straight above the other: no left and right to read
+    length = float(np.linalg.norm(side_normal))
+    if length < 1e-9:  # one hand straight above the other: no left and right to read
         raise _NotBiped("the hands lie along the up axis")
-    side_normal /= np.linalg.norm(side_normal)
+    side_normal /= length
     if forward is not None:
         f = forward - (forward @ up) * up
         if np.linalg.norm(f) < 1e-6:
