@@ -1,4 +1,5 @@
-"""`rigforge eval motion DIR [--artist-only] [--only NAME ...] [--split SPLIT] [--json FILE]`: clip retargeting quality.
+"""`rigforge eval motion DIR [--artist-only] [--only NAME ...] [--split SPLIT] [--options JSON] [--json FILE]`: clip
+retargeting quality.
 
 Registered in cli/main.py as `eval_app.command("motion")(eval_motion.eval_motion)`.
 """
@@ -33,8 +34,8 @@ def render(report: MotionEvaluation, console: Console) -> None:
     table = Table(title="Own clips retargeted artist rig → rig, LBS vertex error in unit-cube units; edge stretch "
                         "(length / bind length) ours and the artist rig's on the same clip (the artist's deviation floored at "
                         "`floor`); enclosed volume / bind volume, lowest–highest frame; "
-                        "CMU 01_01 mocap foot sliding in heights/s; our rig is the job's (default options) and `gate` its quality-gate "
-                        "warnings on that clip")
+                        "CMU 01_01 mocap foot sliding in heights/s; our rig is the job's (see `predictor` below) and `gate` its "
+                        "quality-gate warnings on that clip")
     for head in ("asset", "category", "rig", "clip", "frames", "joints", "mapped", "map"):
         table.add_column(head)
     for head in ("err mean", "err p95", "stretch p1", "stretch p99", "artist p1", "artist p99", "floor", "× artist",
@@ -58,7 +59,9 @@ def render(report: MotionEvaluation, console: Console) -> None:
                       "", "", "", style="bold")
     print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.target}: {r.error}" for r in report.rows if r.error))
     within, measured = report.bound_counts()
-    console.print(f"our rig within {STRETCH_BOUND}× the artist's stretch on the same clip: {within} of {measured} clips")
+    geomean = report.stretch_geomean()
+    console.print(f"our rig within {STRETCH_BOUND}× the artist's stretch on the same clip: {within} of {measured} clips"
+                  + ("" if geomean is None else f"; stretch ratio geometric mean {geomean:.3f}"))
     console.print(f"predictor: {report.predictor}")
 
 
@@ -68,14 +71,17 @@ def eval_motion(
     only: Annotated[list[str] | None, typer.Option(help="evaluate only these asset names")] = None,
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
+    options: Annotated[str, typer.Option(help="JobOptions as JSON for our rig, e.g. '{\"skeleton\": \"keep\"}'")] = "{}",
 ) -> None:
     """Play each character's own clips on the rig a job makes and compare with the artist's animation."""
+    from cli.job_options import parse_job_options
     from simcore.evaluation.motion_eval import evaluate_motion
 
+    job_options = parse_job_options(options)
     console = Console()
     with console.status("retargeting…") as status:
         report = evaluate_motion(directory, use_predicted=not artist_only, only=set(only) if only else None, split=split,
-                                 on_asset=lambda n: status.update(f"retargeting {n}"))
+                                 on_asset=lambda n: status.update(f"retargeting {n}"), options=job_options)
     render(report, console)
     write_report_json(console, json_path, report.to_dict())
 

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
-from pydantic import ValidationError
 
 from cli.progress import stage_bar
 
@@ -30,15 +28,11 @@ def rig(
 ) -> None:
     """Rig one file locally and write the artifacts to OUTPUT."""
     from api.settings import get_settings
+    from cli.job_options import parse_job_options
     from simcore.errors import SimcoreError
-    from simcore.options import JobOptions
     from simcore.pipeline import PipelineInputs, run_pipeline
 
-    try:
-        opts = JobOptions.model_validate(json.loads(options))
-    except (json.JSONDecodeError, ValidationError) as exc:
-        typer.echo(f"invalid --options: {exc}", err=True)
-        raise typer.Exit(2) from exc
+    opts = parse_job_options(options)
     try:
         inputs = PipelineInputs(input, _read_format(input, "mesh", "mesh"),
                                 motion, _read_format(motion, "motion", "motion") if motion else None,

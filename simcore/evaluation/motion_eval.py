@@ -4,7 +4,8 @@ For every rigged .glb/.gltf in DIR that carries animation clips (loader stress t
 - reference: the artist's animation, i.e. LBS of the world-space bind mesh with the artist's weights under
   the clip sampled on the artist's skeleton (bit-exact with a glTF viewer's skinning);
 - ours: exactly what a job does with the file and `options.motion.clip` naming the clip (`job_rig`, `job_clip`):
-  the job's ingest, skeleton and skin stages with default options, then its motion stage and the quality
+  the job's ingest, skeleton and skin stages with default options (or the options given, e.g. `skeleton: keep`
+  to separate what the weights do from what the skeleton does), then its motion stage and the quality
   gate's motion figures, on the ingested mesh (the gate in "warn" mode; its warnings are listed per row);
 - error: mean vertex distance per frame, in unit-cube units (divided by the rest mesh's largest extent),
   averaged over up to 60 evenly spaced frames; "artist" rows retarget onto the artist skeleton itself
@@ -25,6 +26,7 @@ contact, for our rig and (as a reference measured in the same run) the artist's 
 
 from __future__ import annotations
 
+import json
 import tempfile
 import time
 from collections.abc import Callable
@@ -119,6 +121,11 @@ class MotionEvaluation:
         vals = [getattr(r, key) for r in self.rows if r.target == target and getattr(r, key) is not None]
         return float(np.mean(vals)) if vals else None
 
+    def stretch_geomean(self) -> float | None:
+        """Geometric mean of our rows' stretch ratios (each floored at 1e-6): one figure for a whole set."""
+        ratios = [r.stretch_ratio for r in self.rows if r.target == "ours" and r.stretch_ratio is not None]
+        return float(np.exp(np.mean(np.log(np.maximum(ratios, 1e-6))))) if ratios else None
+
     def bound_counts(self) -> tuple[int, int]:
         """(our character × clip rows within STRETCH_BOUND, rows measured)."""
         judged = [r.within_bound for r in self.rows if r.target == "ours" and r.within_bound is not None]
@@ -128,6 +135,7 @@ class MotionEvaluation:
         return {
             "rows": [{**asdict(r), "stretch_ratio": r.stretch_ratio, "within_bound": r.within_bound} for r in self.rows],
             "stretch_bound": STRETCH_BOUND, "within_bound": dict(zip(("within", "measured"), self.bound_counts(), strict=True)),
+            "stretch_ratio_geomean": self.stretch_geomean(),
             "skipped": self.skipped, "predictor": self.predictor,
             "mean": {t: {k: self.mean(t, k) for k in ("vertex_error", "vertex_error_p95", "mocap_sliding")} for t in ("ours", "artist")},
         }
@@ -204,11 +212,12 @@ def _mocap_sliding(mocap: MotionClip | None, vertices: np.ndarray, target: Skele
     return score["sliding_heights_per_s"], score["contact_fraction"]
 
 
-def job_rig(path: Path, workdir: Path) -> PipelineState:
-    """The job's ingest, skeleton and skin stages on `path` with default options (quality gate in warn mode)."""
+def job_rig(path: Path, workdir: Path, options: JobOptions | None = None) -> PipelineState:
+    """The job's ingest, skeleton and skin stages on `path` with `options` (default: the defaults), the quality
+    gate in warn mode."""
     from simcore.pipeline import PipelineInputs, run_pipeline
 
-    options = JobOptions(stages=["skeleton", "skin"], quality_gate="warn")
+    options = (options or JobOptions()).model_copy(update={"stages": ["skeleton", "skin"], "quality_gate": "warn"})
     return run_pipeline(PipelineInputs(path, path.suffix.lstrip(".").lower()), options, workdir)
 
 
@@ -245,13 +254,13 @@ def _bind_frame(state: PipelineState, vertices: np.ndarray) -> tuple[float, np.n
 
 
 def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: sp.csr_matrix, artist_rows: list[MotionRow],
-              mocap: MotionClip | None, workdir: Path) -> list[MotionRow]:
+              mocap: MotionClip | None, workdir: Path, options: JobOptions | None = None) -> list[MotionRow]:
     """Our rig's rows: the job's rig playing each clip (see the module docstring), beside the artist rig's figures
     that `artist_rows` (one per clip) already hold."""
     name, category = artist_rows[0].name, artist_rows[0].category
     started = time.perf_counter()
     try:
-        state = job_rig(path, workdir)
+        state = job_rig(path, workdir, options)
     except SimcoreError as exc:
         return [MotionRow(name, category, "ours", error=f"{exc.code}: {exc}")]
     assert state.mesh is not None and state.skeleton is not None and state.weights is not None, "the stages ran"
@@ -284,8 +293,9 @@ def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: 
 
 
 def evaluate_character(name: str, category: str, path: Path, doc: GltfDocument, asset: RiggedAsset, use_predicted: bool,
-                       mocap: MotionClip | None, workdir: Path) -> list[MotionRow]:
-    """Rows for the artist rig (self-check) and, with `use_predicted`, for the job's rig, per clip."""
+                       mocap: MotionClip | None, workdir: Path, options: JobOptions | None = None) -> list[MotionRow]:
+    """Rows for the artist rig (self-check) and, with `use_predicted`, for the job's rig (made with `options`),
+    per clip."""
     clips = [world_bind(doc, asset, read_gltf_clip(doc, k, asset=asset)) for k in range(len(doc.items("animations")))]
     vertices = clips[0][0]
     floor = deviation_floor(vertices, asset.faces)
@@ -304,16 +314,20 @@ def evaluate_character(name: str, category: str, path: Path, doc: GltfDocument, 
         started = time.perf_counter()
         rows.append(row)
     if use_predicted:
-        rows.extend(_job_rows(path, clips, asset.weights, rows, mocap, workdir))
+        rows.extend(_job_rows(path, clips, asset.weights, rows, mocap, workdir, options))
     return rows
 
 
 def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[str] | None = None, split: str | None = None,
-                    on_asset: Callable[[str], None] = lambda name: None) -> MotionEvaluation:
+                    on_asset: Callable[[str], None] = lambda name: None, options: JobOptions | None = None) -> MotionEvaluation:
     """Evaluate every animated rig in `directory` (see the module docstring); with `split`, only the files
-    DIR/MANIFEST.tsv lists for that split (the training corpus layout)."""
+    DIR/MANIFEST.tsv lists for that split (the training corpus layout); `options`: the job options our rig is
+    made with (stages and gate mode are the eval's)."""
     directory = Path(directory)
     report = MotionEvaluation()
+    changed = options.model_dump(mode="json", exclude_defaults=True) if options else {}
+    if changed:
+        report.predictor = f"the job's stages (options {json.dumps(changed, sort_keys=True)})"
     mocap_path = directory / MOCAP
     mocap = parse_bvh(mocap_path.read_bytes(), name=mocap_path.stem) if mocap_path.is_file() else None
     paths = {p.stem: p for p in asset_files(directory, split)}
@@ -326,5 +340,5 @@ def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[st
                 continue
             on_asset(name)
             report.rows.extend(evaluate_character(name, category, paths[name], doc, asset, use_predicted, mocap,
-                                                  Path(work) / name))
+                                                  Path(work) / name, options))
     return report

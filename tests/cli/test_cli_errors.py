@@ -77,3 +77,12 @@ def test_a_download_that_does_not_match_the_jobs_sha256_fails(elsewhere, monkeyp
     monkeypatch.setattr(service_client.httpx, "Client", lambda *a, **kw: real(*a, transport=httpx.MockTransport(handle), **kw))
     code, err = rigforge("jobs", "download", "j1", "--url", "http://rigforge.test", "--key", "rf_x", "-o", str(elsewhere / "out"))
     assert code == 1 and "report.json: sha256 differs from the job's record" in err
+
+
+@pytest.mark.parametrize("command", [["rig", "mesh.obj"], ["eval", "motion", "."]])
+def test_invalid_options_exit_2_naming_the_field(elsewhere, command):
+    (elsewhere / "mesh.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    code, err = rigforge(*command, "--options", '{"skinning": "magic"}')
+    assert code == 2 and err.startswith("invalid --options:") and "skinning" in err
+    code, err = rigforge(*command, "--options", "{not json")
+    assert code == 2 and err.startswith("invalid --options:")

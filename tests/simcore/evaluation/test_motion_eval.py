@@ -76,3 +76,14 @@ def test_our_rows_are_what_a_job_playing_the_clip_measures(dev_assets, tmp_path)
     assert (walk.stretch_low, walk.stretch_high) == (figures["stretch_low"], figures["stretch_high"])
     assert walk.warnings == [w["code"] for w in state.report.get("warnings", []) if w["stage"] == "motion"]
     assert walk.vertex_error is not None and 0 < walk.vertex_error < 0.1  # the fox ingests at its bind pose: compared
+
+
+def test_our_rig_can_be_made_with_other_options(dev_assets):
+    """`skeleton: keep` plays the clip on the artist's skeleton with our weights: the rows say so, and the set's
+    geometric mean is that of the rows."""
+    report = evaluate_motion(dev_assets, only={"rigged_simple"}, options=JobOptions(skeleton="keep"))
+    artist, ours = (next(r for r in report.rows if r.target == t) for t in ("artist", "ours"))
+    assert ours.error is None and ours.joints == artist.joints and ours.stretch_ratio is not None
+    assert report.predictor == "the job's stages (options {\"skeleton\": \"keep\"})"
+    assert report.stretch_geomean() == pytest.approx(ours.stretch_ratio)
+    assert report.to_dict()["stretch_ratio_geomean"] == report.stretch_geomean()
