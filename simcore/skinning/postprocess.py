@@ -13,23 +13,31 @@ def normalize_rows(weights: np.ndarray) -> np.ndarray:
     return np.divide(w, s, out=w, where=s > 0)  # rows summing to 0 are already all zero
 
 
-def smooth_on_surface(weights: np.ndarray, adjacency: sp.csr_matrix, iterations: int, strength: float = 0.5) -> np.ndarray:
+def smooth_on_surface(weights: np.ndarray, adjacency: sp.csr_matrix, iterations: int, strength: float = 0.5,
+                      vertices: np.ndarray | None = None, reach: float = 0.0) -> np.ndarray:
     """Laplacian smoothing of per-vertex weights along mesh edges.
 
     weights: (V, J) float; adjacency: (V, V) 0/1 CSR (simcore.geometry.laplacian.adjacency). Each pass moves a
     vertex's weights `strength` of the way to the mean of its neighbours; isolated vertices keep theirs.
-    Row sums are preserved (a mean of normalised rows is normalised).
+    With `vertices` (V, 3) and `reach` > 0, a neighbour farther than `reach` counts by (reach / length)²: the
+    smoothing evens out steps at the scale of `reach` and does not carry weight along edges much longer than that
+    (a coarse mesh's long edges would move weight across whole bones). Row sums are preserved (each pass is a
+    convex combination of normalised rows).
     """
     w = np.asarray(weights, dtype=np.float64)
     if iterations <= 0 or adjacency.nnz == 0:
         return w.copy()
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
     has = degree > 0
-    mean_op = sp.diags(np.where(has, 1.0 / np.maximum(degree, 1), 0.0)) @ adjacency
-    keep = np.where(has, 1.0 - strength, 1.0)[:, None]
-    move = np.where(has, strength, 0.0)[:, None]
+    links = adjacency.tocoo()
+    if vertices is not None and reach > 0:
+        length = np.linalg.norm(vertices[links.row] - vertices[links.col], axis=1)
+        share = np.minimum(1.0, (reach / np.maximum(length, 1e-30)) ** 2)
+        links = sp.coo_matrix((links.data * share, (links.row, links.col)), shape=adjacency.shape)
+    mean_op = (sp.diags(np.where(has, strength / np.maximum(degree, 1), 0.0)) @ links).tocsr()  # strength × the mean
+    keep = 1.0 - np.asarray(mean_op.sum(axis=1))  # what stays of each vertex's own weights
     for _ in range(iterations):
-        w = keep * w + move * (mean_op @ w)
+        w = keep * w + mean_op @ w
     return w
 
 

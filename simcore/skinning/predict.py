@@ -21,7 +21,7 @@ from simcore.geometry.referenced import ReferencedMesh, referenced_mesh
 from simcore.geometry.weld import weld_vertices
 from simcore.model_weights import ModelUnavailable
 from simcore.skeleton.types import Skeleton
-from simcore.skinning.geodesic import geodesic_weights
+from simcore.skinning.geodesic import RESOLUTION, geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import learned_summary, learned_weights
 from simcore.skinning.parts import bind_rigid_parts
@@ -43,6 +43,7 @@ MAX_JOINTS = 1024
 MAX_ENTRIES = 100_000_000
 PROGRESS_POLL_S = 0.25  # how often `auto`'s caller hears the methods' progress (and can cancel)
 SMOOTH_STRENGTH = 0.25  # per pass: evens out voxel-grid steps while keeping weights as sharp as artists' are
+SMOOTH_REACH_VOXELS = 8.0  # edges up to this many of the geodesic grid's voxels long count fully in the smoothing
 
 
 @dataclass
@@ -88,7 +89,7 @@ def compute_weights(
     *,
     method: Method = "auto",
     max_influences: int = 4,
-    smooth_iterations: int = 2,
+    smooth_iterations: int = 8,
     progress: Callable[[float], None] | None = None,
     root_deforms: bool = False,
 ) -> SkinningResult:
@@ -120,6 +121,7 @@ def compute_weights(
     welded = weld_vertices(v, f)
     adj = adjacency(welded.faces, len(welded.vertices))
     first = np.unique(welded.index, return_index=True)[1]  # one original vertex per welded vertex
+    reach = SMOOTH_REACH_VOXELS * float(np.ptp(welded.vertices, axis=0).max()) / RESOLUTION
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
@@ -128,7 +130,7 @@ def compute_weights(
         # Smooth on the welded surface so seam duplicates stay identical, then map back.
         on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
         on_welded[welded.index] = dense
-        dense = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH)[welded.index]
+        dense = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH, welded.vertices, reach)[welded.index]
         weights = top_k(dense, max_influences)
         seconds = time.perf_counter() - started
         step(0.9)
