@@ -6,6 +6,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
+from simcore.skinning.postprocess import SMOOTH_ITERATIONS
+
 Axis = Literal["x", "y", "z", "-x", "-y", "-z"]
 
 
@@ -76,7 +78,7 @@ class JobOptions(_Strict):
     units: Literal["auto", "m", "cm", "mm", "in"] = "auto"
     skinning: Literal["auto", "learned", "geodesic", "heat"] = "auto"
     max_influences: Literal[4, 8] = 4
-    smooth_iterations: int = Field(8, ge=0, le=50)
+    smooth_iterations: int = Field(SMOOTH_ITERATIONS, ge=0, le=50)
     exclude_joints: list[Annotated[str, Field(min_length=1, max_length=200)]] = Field(
         default_factory=list, max_length=256,
         description="glob patterns (case-insensitive) of joints that get no skinning weight, e.g. a kept rig's "

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+SMOOTH_ITERATIONS = 8  # default smoothing passes of every method's weights (JobOptions.smooth_iterations)
+
 
 def normalize_rows(weights: np.ndarray) -> np.ndarray:
     """(V, J) float64 copy with non-negative rows summing to 1; all-zero rows stay zero."""
@@ -28,13 +30,12 @@ def smooth_on_surface(weights: np.ndarray, adjacency: sp.csr_matrix, iterations:
     if iterations <= 0 or adjacency.nnz == 0:
         return w.copy()
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
-    has = degree > 0
     links = adjacency.tocoo()
     if vertices is not None and reach > 0:
         length = np.linalg.norm(vertices[links.row] - vertices[links.col], axis=1)
         share = np.minimum(1.0, (reach / np.maximum(length, 1e-30)) ** 2)
         links = sp.coo_matrix((links.data * share, (links.row, links.col)), shape=adjacency.shape)
-    mean_op = (sp.diags(np.where(has, strength / np.maximum(degree, 1), 0.0)) @ links).tocsr()  # strength × the mean
+    mean_op = (sp.diags(strength / np.maximum(degree, 1)) @ links).tocsr()  # strength × the mean (isolated rows: 0)
     keep = 1.0 - np.asarray(mean_op.sum(axis=1))  # what stays of each vertex's own weights
     for _ in range(iterations):
         w = keep * w + mean_op @ w

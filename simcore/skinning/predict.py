@@ -21,11 +21,11 @@ from simcore.geometry.referenced import ReferencedMesh, referenced_mesh
 from simcore.geometry.weld import weld_vertices
 from simcore.model_weights import ModelUnavailable
 from simcore.skeleton.types import Skeleton
-from simcore.skinning.geodesic import RESOLUTION, geodesic_weights
+from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import learned_summary, learned_weights
 from simcore.skinning.parts import bind_rigid_parts
-from simcore.skinning.postprocess import smooth_on_surface, top_k
+from simcore.skinning.postprocess import SMOOTH_ITERATIONS, smooth_on_surface, top_k
 from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
 from simcore.skinning.quality import quality_scores
 
@@ -43,7 +43,7 @@ MAX_JOINTS = 1024
 MAX_ENTRIES = 100_000_000
 PROGRESS_POLL_S = 0.25  # how often `auto`'s caller hears the methods' progress (and can cancel)
 SMOOTH_STRENGTH = 0.25  # per pass: evens out voxel-grid steps while keeping weights as sharp as artists' are
-SMOOTH_REACH_VOXELS = 8.0  # edges up to this many of the geodesic grid's voxels long count fully in the smoothing
+SMOOTH_REACH = 1 / 16  # × the model size: edges up to this long count fully in the smoothing (8 geodesic-grid voxels)
 
 
 @dataclass
@@ -89,7 +89,7 @@ def compute_weights(
     *,
     method: Method = "auto",
     max_influences: int = 4,
-    smooth_iterations: int = 8,
+    smooth_iterations: int = SMOOTH_ITERATIONS,
     progress: Callable[[float], None] | None = None,
     root_deforms: bool = False,
 ) -> SkinningResult:
@@ -121,7 +121,7 @@ def compute_weights(
     welded = weld_vertices(v, f)
     adj = adjacency(welded.faces, len(welded.vertices))
     first = np.unique(welded.index, return_index=True)[1]  # one original vertex per welded vertex
-    reach = SMOOTH_REACH_VOXELS * float(np.ptp(welded.vertices, axis=0).max()) / RESOLUTION
+    reach = SMOOTH_REACH * float(np.ptp(welded.vertices, axis=0).max())
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()

@@ -11,7 +11,8 @@ from simcore.skinning.postprocess import smooth_on_surface
 def _strip() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Two quads of a strip, 0.1 apart inside each and 1.3 apart between them (a coarse ring mesh's long edge).
 
-    Vertices 0-1 belong to bone 0, 2-5 to bone 1; the edge 0.1 → 1.4 crosses the bones."""
+    Vertices 0-1 belong to bone 0, 2-5 to bone 1: bone 0's weight reaches 2-3 over short edges and could only
+    go on to 4-5 along the long ones."""
     x = np.array([0.0, 0.0, 0.1, 0.1, 1.4, 1.4])
     y = np.array([0.0, 1.0, 0.0, 1.0, 0.0, 1.0])
     vertices = np.column_stack([x, y, np.zeros(6)])
