@@ -26,8 +26,9 @@ class ModelConfig:
     width: int = 64
     heads: int = 4
     bone_layers: int = 2
+    dropout: float = 0.0  # training only: on the bone context, the pair embeddings and the output layer's input
 
-    def to_dict(self) -> dict[str, int]:
+    def to_dict(self) -> dict[str, float]:
         return asdict(self)
 
 
@@ -43,7 +44,7 @@ class SkinAttention(nn.Module):
         w = config.width
         self.config = config
         self.bone_in = nn.Linear(BONE_FEATURES, w)
-        layer = nn.TransformerEncoderLayer(w, config.heads, dim_feedforward=2 * w, dropout=0.0, batch_first=True, norm_first=True)
+        layer = nn.TransformerEncoderLayer(w, config.heads, dim_feedforward=2 * w, dropout=config.dropout, batch_first=True, norm_first=True)
         self.bone_context = nn.TransformerEncoder(layer, config.bone_layers, enable_nested_tensor=False)
         self.point_in = _mlp(POINT_FEATURES, w, w)
         self.pair_in = _mlp(PAIR_FEATURES + 2 * w, w, w)
@@ -71,13 +72,16 @@ class SkinAttention(nn.Module):
         first = cast(nn.Linear, self.pair_in[0])
         wp, wb, wq = first.weight.split([PAIR_FEATURES, w, w], dim=1)
         pre = pair @ wp.T + (bones @ wb.T)[candidates] + (p @ wq.T + first.bias)[:, None, :]
-        h = self.pair_in[1:](pre)  # (V, K, w)
+        h = self._drop(self.pair_in[1:](pre))  # (V, K, w)
         context = self._attend(p, h, valid)[:, None, :]  # (V, 1, w)
-        z = self.norm(h + context)
+        z = self._drop(self.norm(h + context))
         top = cast(nn.Linear, self.out[0])
         wz, wc = top.weight.split([w, w], dim=1)
         out = self.out[1:](z @ wz.T + (context @ wc.T + top.bias))[..., 0] + self.prior_scale * prior
         return out if valid is None else out.masked_fill(~valid, float("-inf"))
+
+    def _drop(self, x: torch.Tensor) -> torch.Tensor:
+        return nn.functional.dropout(x, self.config.dropout, self.training)
 
     def _attend(self, query: torch.Tensor, pairs: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
         """`self.cross` for one query per vertex over its K pairs: (V, w), (V, K, w) → (V, w).

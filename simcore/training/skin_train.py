@@ -5,7 +5,8 @@ sample count), so humanoids do not drown the rest) and `points` vertices of each
 predicted and artist weights (mass outside the candidates counts as error), `kl` × cross-entropy, and
 `deform` × the distance between the vertex skinned with predicted and with artist weights in random poses
 (unit-cube units). Every `val_every` steps the model is scored on all `val` samples (mean L1 and deformation);
-the best state by val L1 is what gets saved. One JSON line per step block and per validation goes to the log.
+the best state by val L1 is what gets saved (with `ema`, the moving average of the weights is what is scored
+and saved). One JSON line per step block and per validation goes to the log.
 """
 
 from __future__ import annotations
@@ -15,9 +16,11 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import torch
+from torch.optim.swa_utils import AveragedModel, get_ema_multi_avg_fn
 
 from simcore.model_weights import save_weights
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
@@ -41,6 +44,7 @@ class TrainConfig:
     threads: int = 1  # per-sample ops are small: extra intra-op threads spin and wait when another process holds a core
     device: str = "cpu"  # "cuda" trains on the GPU (samples are moved there once)
     forward_samples: int = 1  # samples per forward pass (0: the whole batch); one at a time keeps a CPU's cache warm
+    ema: float = 0.0  # > 0: validate and save an exponential moving average of the weights with this decay per step
     model: ModelConfig = field(default_factory=ModelConfig)
 
 
@@ -136,6 +140,8 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
     model = SkinAttention(config.model).to(config.device)
     opt = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=config.lr, total_steps=config.steps, pct_start=0.05)
+    averaged = AveragedModel(model, multi_avg_fn=get_ema_multi_avg_fn(config.ema)) if config.ema > 0 else None
+    scored = cast(SkinAttention, averaged.module) if averaged is not None else model
     started = time.perf_counter()
     best = evaluate(model, val)
     best_state = {k: v.clone() for k, v in model.state_dict().items()}
@@ -166,6 +172,8 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
             opt.step()
             sched.step()
+            if averaged is not None:
+                averaged.update_parameters(model)
             running["loss"].append(loss.detach())
             entry: dict = {}
             if step % config.log_every == 0:
@@ -173,12 +181,12 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
                          **{k: round(float(torch.stack(v).mean()), 5) for k, v in running.items()}}
                 running = {k: [] for k in running}
             if step % config.val_every == 0 or step == config.steps:
-                scores = evaluate(model, val)
+                scores = evaluate(scored, val)
                 entry.update(step=step, val=scores)
                 history.append({"step": step, "val": scores})
                 if scores["l1"] < best["l1"]:
                     best, best_step = scores, step
-                    best_state = {k: v.clone() for k, v in model.state_dict().items()}
+                    best_state = {k: v.clone() for k, v in scored.state_dict().items()}
             if entry:
                 fh.write(json.dumps(entry) + "\n")
                 fh.flush()

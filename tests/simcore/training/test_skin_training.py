@@ -9,7 +9,7 @@ import pytest
 import scipy.sparse as sp
 import torch
 
-from simcore.model_weights import ModelUnavailable
+from simcore.model_weights import ModelUnavailable, save_weights
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.skinning.learned import learned_weights, load_model, with_armature_root
@@ -19,13 +19,15 @@ from simcore.training.skin_train import TrainConfig, batch_losses, sample_tensor
 from tests.simcore.training.creatures import capsule_dog
 
 
-def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path) -> None:
+@pytest.mark.parametrize("ema", [0.0, 0.8])
+def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path, ema: float) -> None:
     creature = capsule_dog()
     rng = np.random.default_rng(0)
     for k, c in enumerate(variants(creature, rng, 3, 30.0)):
         save_sample(tmp_path / "data" / "train" / f"dog_{k}.npz", make_sample(c, rng, 600).arrays())
     save_sample(tmp_path / "data" / "val" / "dog.npz", make_sample(creature, rng, 600).arrays())
-    config = TrainConfig(steps=40, batch=2, points=256, lr=5e-3, val_every=20, log_every=10, model=ModelConfig(width=16, heads=2, bone_layers=1))
+    config = TrainConfig(steps=40, batch=2, points=256, lr=5e-3, val_every=20, log_every=10, ema=ema,
+                         model=ModelConfig(width=16, heads=2, bone_layers=1, dropout=0.1))
     out = tmp_path / "model.safetensors"
     summary = train_skin(config, tmp_path / "data", out, tmp_path / "log.jsonl", lambda step, total, entry: None)
     assert summary["val"]["l1"] < summary["val_at_start"]["l1"] - 0.02  # better than the geodesic prior it starts from
@@ -97,3 +99,21 @@ def _merged_legs(c: Character) -> tuple[Skeleton, sp.csr_matrix]:
     merged[:, 0] += dense.sum(axis=1) - merged.sum(axis=1)
     return sub, sp.csr_matrix(merged)
 
+
+
+def test_dropout_acts_in_training_only_and_is_stored_with_the_weights(tmp_path: Path) -> None:
+    sample = sample_tensors(make_sample(capsule_dog(), np.random.default_rng(2), 200))
+    torch.manual_seed(0)
+    model = SkinAttention(ModelConfig(width=16, heads=2, bone_layers=1, dropout=0.3))
+    for p in model.out.parameters():
+        torch.nn.init.normal_(p, std=0.3)
+    args = [sample[k] for k in ("pair", "bone", "point", "candidates", "prior")]
+    with torch.no_grad():
+        assert not torch.equal(model(*args), model(*args))  # training mode: dropout draws differ
+        model.eval()
+        np.testing.assert_array_equal(model(*args).numpy(), model(*args).numpy())
+        path = tmp_path / "dropout.safetensors"
+        save_weights(model, path, {})
+        loaded = load_model(path)
+        assert loaded.config.dropout == 0.3 and not loaded.training
+        np.testing.assert_allclose(loaded(*args).numpy(), model(*args).numpy(), atol=1e-6)
