@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from cli import eval_gate, eval_motion, eval_motion_rig, eval_skeleton, eval_skin, fit, jobs, keys, rig, server, submit, train, validate
+from cli import eval_gate, eval_motion, eval_motion_rig, eval_parts, eval_skeleton, eval_skin, fit, jobs, keys, rig, server, submit, train, validate
 
 app = typer.Typer(help="RigForge: automatic rigging and skinning.", no_args_is_help=True, pretty_exceptions_enable=False)
 eval_app = typer.Typer(help="Quality evaluations on a directory of rigged assets.", no_args_is_help=True)
@@ -25,6 +25,7 @@ eval_app.command("skin")(eval_skin.eval_skin)
 eval_app.command("motion")(eval_motion.eval_motion)
 eval_app.command("motion-rig")(eval_motion_rig.eval_motion_rig)
 eval_app.command("gate")(eval_gate.eval_gate)
+eval_app.command("parts")(eval_parts.eval_parts)
 
 if __name__ == "__main__":
     app()

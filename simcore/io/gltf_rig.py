@@ -396,6 +396,16 @@ def rig_rest_matrices(doc: GltfDocument, asset: RiggedAsset, world: np.ndarray |
     return world[asset.joint_nodes] @ np.linalg.inv(asset.bind_matrices)
 
 
+def weightless_joints(weights: sp.spmatrix, eps: float = 1e-6) -> np.ndarray:
+    """(J,) bool: joints of a rig (parents first) that no vertex of its (V, J) weights follows (pole targets,
+    bone-end markers, sockets), the root (index 0) aside, which every tree keeps; all False when no joint holds
+    weight (an unweighted skin tells nothing)."""
+    held = np.asarray(sp.csr_matrix(weights).max(axis=0).todense()).ravel() > eps
+    out = ~held if held.any() else np.zeros(len(held), bool)
+    out[:1] = False
+    return out
+
+
 def used_joints(skeleton: Skeleton, weights: sp.csr_matrix, eps: float = 1e-6) -> np.ndarray:
     """(J,) bool: joints that influence a vertex or have a descendant that does."""
     keep = np.asarray(weights.max(axis=0).todense()).ravel() > eps

@@ -69,6 +69,7 @@ class JointKind(str, Enum):
     HAND = "hand"  # Mixamo finger joint
     SPRING = "spring"  # secondary chain (hair, tail, skirt)
     FREE = "free"  # anything else
+    HELPER = "helper"  # deforms nothing (a kept rig's pole target, bone-end marker, socket): owns no bone to skin to
 
 
 @dataclass

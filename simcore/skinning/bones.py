@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import JointKind, Skeleton
 
 ROWS = 8192  # points per block in closest_on_segments
 
@@ -26,10 +26,14 @@ class JointSegments:
 
 
 def joint_segments(skeleton: Skeleton, leaf_extension: float = 0.5) -> JointSegments:
-    """Segments of every joint (at least one each; a lone root gets a point)."""
+    """Segments of every joint (at least one each; a lone root gets a point) but helper joints
+    (JointKind.HELPER), which own none: nothing is skinned to them, while their parents' bones to them remain."""
     pos = skeleton.positions
     heads, tails, owner = [], [], []
+    helper = [kind == JointKind.HELPER for kind in skeleton.kinds]
     for j, kids in enumerate(skeleton.children()):
+        if helper[j]:
+            continue
         for c in kids:
             heads.append(pos[j])
             tails.append(pos[c])

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from simcore.model_weights import load_weights, read_metadata
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.skinning.pair_features import skin_inputs
 
@@ -45,7 +45,7 @@ def with_armature_root(vertices: np.ndarray, skeleton: Skeleton) -> Skeleton:
     below = skeleton.positions[0].copy()
     below[1] = float(vertices[:, 1].min())
     return Skeleton(np.vstack([below, skeleton.positions]), np.r_[-1, np.maximum(skeleton.parents + 1, 0)],
-                    [ARMATURE_ROOT, *skeleton.names])
+                    [ARMATURE_ROOT, *skeleton.names], [JointKind.FREE, *skeleton.kinds])
 
 
 def learned_weights(

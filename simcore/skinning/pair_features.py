@@ -147,6 +147,7 @@ def skin_inputs(
     cand = np.argsort(geo, axis=1, kind="stable")[:, :k]
     g = np.take_along_axis(geo, cand, axis=1)
     e, a = _nearest_segment(dist, t, segments.owner, j, cand)
+    e = np.where(np.isfinite(e), e, FAR)  # a helper joint owns no segment (bones.py): as far as an unreachable one
     prior = np.log(np.maximum(falloff_weights(g, DISTANCE_UNIT), 1e-12))
     prior -= prior.max(axis=1, keepdims=True)
     normals = trimesh.Trimesh(v, faces, process=False).vertex_normals

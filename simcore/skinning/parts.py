@@ -1,14 +1,16 @@
 """Separate mesh parts that lean mostly on one joint follow that joint alone.
 
-Characters are often built of separate pieces (armour plates, robot segments, eyes, buttons, joint covers)
-that artists bind rigidly to one bone: such a piece never needs to bend, and blending it between bones
-stretches it wherever the bones turn apart. A part is a connected component of the welded surface. In a mesh
-of several parts, every part whose weight mass lies at least RIGID_SHARE on one joint is bound to that joint
-alone, and so is a part with no joint inside its bounding box, however its weight is spread: with no joint to
-bend about, a piece that blends between bones (an eye between head and neck) can only stretch. Parts that spread
-their weight wider and hold a joint (a body surface, a sleeve over an elbow) keep a blend, and so does a part
-larger than MAX_PIECE of the whole (a body, not a piece, whose blend the method chose for a reason); a mesh of
-one piece is left as it is.
+Characters are often built of separate pieces (armour plates, robot segments, eyes, buttons, joint covers,
+wheels, shields) that artists bind rigidly to one bone: such a piece never needs to bend, and blending it
+between bones stretches it wherever the bones turn apart. A part is a connected component of the welded surface.
+In a mesh of several parts, every part whose weight mass lies at least RIGID_SHARE on one joint is bound to that
+joint alone, and so is a part with no joint inside its bounding box, however its weight is spread: with no joint
+to bend about, a piece that blends between bones (an eye between head and neck) can only stretch. Parts that
+spread their weight wider and hold a joint (a body surface, a sleeve over an elbow) keep a blend. A part larger
+than MAX_PIECE of the whole keeps its blend too (a body, whose blend the method chose for a reason) unless it
+holds at most one joint: with one joint or none to bend about, a large part is a rigid piece as well (a wheel,
+a cart, a shield): `rigforge eval parts ../shared/corpus --split train` counts how artists bind each class of
+part. A mesh of one piece is left as it is.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ RIGID_SHARE = 0.5  # a part with at least this share of its weight mass on one j
 MAX_PIECE = 0.35  # only parts whose box diagonal is at most this share of the whole mesh's are pieces
 
 
-def _part_boxes(vertices: np.ndarray, labels: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+def part_boxes(vertices: np.ndarray, labels: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
     """(parts, 3) lowest and highest corners of each part's bounding box."""
     lo = np.full((count, 3), np.inf)
     hi = np.full((count, 3), -np.inf)
@@ -42,14 +44,16 @@ def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_m
     mass = np.asarray((members @ w).todense())  # (parts, J)
     total = mass.sum(axis=1)
     top = mass.argmax(axis=1)
-    lo, hi = _part_boxes(vertices, labels, count)
+    lo, hi = part_boxes(vertices, labels, count)
     whole = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
     leaning = mass[np.arange(count), top] >= share * total
+    small = np.linalg.norm(hi - lo, axis=1) / whole <= max_size
     if joints is not None and len(joints):
         within = (np.asarray(joints)[None] >= lo[:, None]) & (np.asarray(joints)[None] <= hi[:, None])  # (parts, J, 3)
-        holds = np.any(np.all(within, axis=2), axis=1)
-        leaning |= ~holds
-    rigid = (total > 0) & leaning & (np.linalg.norm(hi - lo, axis=1) / whole <= max_size)
+        held = np.all(within, axis=2).sum(axis=1)
+        leaning |= held == 0
+        small |= held <= 1
+    rigid = (total > 0) & leaning & small
     rows = np.flatnonzero(rigid[labels])
     if not len(rows):
         return w

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 from collections.abc import Callable
@@ -20,12 +21,12 @@ from simcore.geometry.parts import part_labels, welded_part_labels
 from simcore.geometry.referenced import ReferencedMesh, referenced_mesh
 from simcore.geometry.weld import weld_vertices
 from simcore.model_weights import ModelUnavailable
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import learned_summary, learned_weights
 from simcore.skinning.parts import bind_rigid_parts
-from simcore.skinning.postprocess import SMOOTH_ITERATIONS, smooth_on_surface, top_k
+from simcore.skinning.postprocess import SMOOTH_ITERATIONS, normalize_rows, smooth_on_surface, top_k
 from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
 from simcore.skinning.quality import quality_scores
 
@@ -92,6 +93,7 @@ def compute_weights(
     smooth_iterations: int = SMOOTH_ITERATIONS,
     progress: Callable[[float], None] | None = None,
     root_deforms: bool = False,
+    exclude: np.ndarray | None = None,
 ) -> SkinningResult:
     """Skinning weights of a mesh for a skeleton in the same space.
 
@@ -101,8 +103,15 @@ def compute_weights(
     split (its file carries those figures); when its weights cannot be read, `auto` runs geodesic and heat
     and keeps the lower unsupervised `score`. root_deforms: the skeleton was predicted, so its root is a body joint
     that bends the mesh, not an artist's armature root (the learned method uses it; see learned.py).
+    exclude: (J,) bool joints that get no weight (never the root): they stay in the tree, so every other bone keeps
+    its shape, but own no bone to skin to (JointKind.HELPER, see bones.py) and their columns stay empty.
     Raises InvalidInput / LimitExceeded for unusable input.
     """
+    if exclude is not None and np.any(exclude):
+        if exclude[0]:
+            raise InvalidInput(f"the root joint {skeleton.names[0]!r} cannot be left out; every vertex needs a joint to follow",
+                               code="invalid_option", field="options.exclude_joints")
+        skeleton = dataclasses.replace(skeleton, kinds=[JointKind.HELPER if out else kind for kind, out in zip(skeleton.kinds, exclude)])
     if method != "auto" and method not in METHODS:
         raise InvalidInput(f"unknown skinning method {method!r}; use auto, {', '.join(METHODS)}", code="invalid_option", field="skinning")
     reason, use_learned = "", False
@@ -122,11 +131,15 @@ def compute_weights(
     adj = adjacency(welded.faces, len(welded.vertices))
     first = np.unique(welded.index, return_index=True)[1]  # one original vertex per welded vertex
     reach = SMOOTH_REACH * float(np.ptp(welded.vertices, axis=0).max())
+    helpers = np.array([kind == JointKind.HELPER for kind in skeleton.kinds])
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
         extra = {"root_deforms": True} if root_deforms and name == "learned" else {}
         dense = METHODS[name](v, f, skeleton, progress=lambda fraction: step(0.8 * fraction), **extra)
+        if helpers.any():  # a helper owns no bone, but a method may still leave it a trace (a far learned candidate)
+            dense[:, helpers] = 0.0
+            dense = normalize_rows(dense)
         # Smooth on the welded surface so seam duplicates stay identical, then map back.
         on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
         on_welded[welded.index] = dense
@@ -161,7 +174,7 @@ def compute_weights(
     weights = transfer(results[best], v, mesh.vertices, max_influences) if on_proxy else results[best]
     # separate pieces mostly on one joint, or holding none, follow one; the parts come from the weld above unless that was the proxy's
     labels = part_labels(mesh.vertices, mesh.faces) if on_proxy else welded_part_labels(welded, adj)
-    weights = bind_rigid_parts(mesh.vertices, labels, weights, skeleton.positions)
+    weights = bind_rigid_parts(mesh.vertices, labels, weights, skeleton.positions[~helpers])  # helpers hold no part
     return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
 
 

@@ -2,7 +2,9 @@
 
 A ground plane the skeleton stage found (state.ground_faces) is left out of the weights and bound to the root.
 Joints matching options.exclude_joints (a kept rig's IK targets and controls) get no weight: the weights are
-computed on the tree without them and they keep empty columns.
+computed on the tree without them and they keep empty columns. So do, with `skeleton: keep`, the joints the
+upload's own weights never use: pole targets, bone-end markers and sockets, whose bind transforms exporters often
+leave at an armature root or the origin, where they would pull whatever mesh lies there.
 """
 
 from __future__ import annotations
@@ -12,9 +14,9 @@ import time
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 
 from simcore.errors import InvalidInput
+from simcore.io.gltf_rig import weightless_joints
 from simcore.metrics.skinning import weight_stats
 from simcore.skinning.postprocess import bind_to_joint
 from simcore.skinning.predict import compute_weights
@@ -36,19 +38,19 @@ def run(state: PipelineState, progress: StageProgress) -> None:
 
     ground = state.ground_faces if state.ground_faces is not None else np.zeros(len(state.mesh.faces), bool)
     drop = _excluded(state)
-    skeleton, kept = state.skeleton.without(drop)
+    helpers = _weightless_in_upload(state) & ~drop
     result = compute_weights(
         state.mesh.vertices,
         state.mesh.faces[~ground],
-        skeleton,
+        state.skeleton,
         method=options.skinning,
         max_influences=options.max_influences,
         smooth_iterations=options.smooth_iterations,
         progress=report,
         root_deforms=state.options.skeleton != "keep",
+        exclude=drop | helpers,
     )
-    w = result.weights  # columns of the kept joints → columns of the whole skeleton
-    weights = sp.csr_matrix((w.data, kept[w.indices], w.indptr), shape=(w.shape[0], state.skeleton.num_joints))
+    weights = result.weights
     on_body = np.zeros(len(state.mesh.vertices), bool)
     on_body[state.mesh.faces[~ground]] = True
     on_ground = np.zeros(len(state.mesh.vertices), bool)
@@ -65,11 +67,21 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         "max_influences": options.max_influences,
         "smooth_iterations": options.smooth_iterations,
         "excluded_joints": [name for name, out in zip(state.skeleton.names, drop) if out],
+        "weightless_in_upload": [name for name, out in zip(state.skeleton.names, helpers) if out],
         "scores": result.scores,
         "weights": stats,
         "seconds": round(time.perf_counter() - started, 3),
     }
     progress(1.0)
+
+
+def _weightless_in_upload(state: PipelineState) -> np.ndarray:
+    """(J,) bool: with `skeleton: keep`, the kept rig's joints that its own weights never use (but the root)."""
+    assert state.skeleton is not None and state.mesh is not None, "run() checked it"
+    rig = state.mesh.source_rig
+    if state.options.skeleton != "keep" or state.inputs.skeleton_path is not None or rig is None:
+        return np.zeros(state.skeleton.num_joints, bool)
+    return weightless_joints(rig.weights)
 
 
 def _excluded(state: PipelineState) -> np.ndarray:

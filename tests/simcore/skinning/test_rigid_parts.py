@@ -81,3 +81,14 @@ def test_rigid_pieces_are_parts_on_one_joint_alone():
     assert not rigid_piece_vertices(labels, sp.csr_matrix(dense))[4:].any()
     one = np.zeros(4, np.int64)  # a mesh of one part has no separate pieces
     assert not rigid_piece_vertices(one, sp.csr_matrix(np.eye(3)[[1, 1, 1, 1]])).any()
+
+
+def test_a_large_part_holding_one_joint_is_a_rigid_piece():
+    """Parts half the mesh's extent: one holding a single joint (a wheel) follows the joint it leans on; one
+    holding two joints (a body) keeps its blend."""
+    v, f = _two_parts()
+    dense = np.tile([[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]], (2, 1))
+    joints = np.array([[0.2, 0.2, 0.2], [0.3, 0.1, 0.1], [3.2, 0.2, 0.2]])  # two in the first part, one in the second
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints, max_size=0.35).toarray()
+    assert np.allclose(out[:4], dense[:4])
+    assert np.array_equal(out[4:], np.tile([1.0, 0.0, 0.0], (4, 1)))

@@ -76,3 +76,29 @@ def test_the_root_cannot_be_excluded(tmp_path: Path) -> None:
     with pytest.raises(InvalidInput) as err:
         stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
     assert err.value.field == "options.exclude_joints"
+
+
+def test_joints_the_kept_rig_never_weights_get_no_weight(tmp_path: Path) -> None:
+    """With `skeleton: keep`, a joint the upload's own weights leave empty (its IK target) is a helper: no weight,
+    its column kept, and the report names it; with a predicted skeleton nothing is left out."""
+    import scipy.sparse as sp
+
+    from simcore.io.gltf_rig import RiggedAsset
+
+    state, ik = _ik_rig(tmp_path, skeleton="keep")
+    assert state.mesh is not None and state.skeleton is not None
+    nearest = np.argmin(np.linalg.norm(state.mesh.vertices[:, None] - state.skeleton.positions[None, :ik], axis=2), axis=1)
+    own = sp.csr_matrix((np.ones(len(nearest)), (np.arange(len(nearest)), nearest)), shape=(len(nearest), ik + 1))
+    state.mesh.source_rig = RiggedAsset(state.mesh.vertices, state.mesh.faces, state.skeleton, own,
+                                        np.arange(ik + 1), np.tile(np.eye(4), (ik + 1, 1, 1)))
+    stage.run(state, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
+    assert state.weights is not None and state.weights.shape[1] == ik + 1 and state.weights[:, ik].sum() == 0.0
+    np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
+    assert state.report["skinning"]["weightless_in_upload"] == ["Foot_IK"] and state.report["skinning"]["excluded_joints"] == []
+
+    predicted, ik = _ik_rig(tmp_path)  # the same rig as a predicted skeleton: the IK target is a joint like any other
+    assert predicted.mesh is not None
+    predicted.mesh.source_rig = state.mesh.source_rig
+    stage.run(predicted, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
+    assert predicted.weights is not None and predicted.weights[:, ik].sum() > 1.0
+    assert predicted.report["skinning"]["weightless_in_upload"] == []
