@@ -28,7 +28,7 @@ import scipy.sparse as sp
 from simcore.errors import InvalidInput, SimcoreError
 from simcore.evaluation.assets import rigged_assets
 from simcore.io.gltf_document import GltfDocument
-from simcore.io.gltf_rig import RiggedAsset, weightless_joints
+from simcore.io.gltf_rig import RiggedAsset, root_holds_weight, weightless_joints
 from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
@@ -255,7 +255,8 @@ def evaluate_skinning(
             started = time.perf_counter()
             try:
                 result = compute_weights(asset.vertices, asset.faces, asset.skeleton, method=method,  # type: ignore[arg-type]
-                                         exclude=weightless_joints(asset.weights))  # as a job keeping this skeleton
+                                         root_deforms=root_holds_weight(asset.weights),  # as a job keeping this skeleton
+                                         exclude=weightless_joints(asset.weights))
                 seconds = time.perf_counter() - started
                 metrics = score_weights(asset, result.weights, clips)
                 metrics["seconds"] = seconds

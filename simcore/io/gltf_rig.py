@@ -396,6 +396,16 @@ def rig_rest_matrices(doc: GltfDocument, asset: RiggedAsset, world: np.ndarray |
     return world[asset.joint_nodes] @ np.linalg.inv(asset.bind_matrices)
 
 
+ARMATURE_SHARE = 0.01  # a root holding at most this share of the weight is an armature root, not a body joint
+
+
+def root_holds_weight(weights: sp.spmatrix) -> bool:
+    """Whether a rig's root (joint 0) is a body joint that bends the mesh: more than ARMATURE_SHARE of its (V, J)
+    weights' mass is on it. Most artist rigs hang the body from an armature root that holds none."""
+    column = np.asarray(sp.csr_matrix(weights).sum(axis=0)).ravel()
+    return bool(column.sum() > 0 and column[0] > ARMATURE_SHARE * column.sum())
+
+
 def weightless_joints(weights: sp.spmatrix, eps: float = 1e-6) -> np.ndarray:
     """(J,) bool: joints of a rig (parents first) that no vertex of its (V, J) weights follows (pole targets,
     bone-end markers, sockets), the root (index 0) aside, which every tree keeps; all False when no joint holds

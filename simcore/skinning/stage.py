@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from simcore.errors import InvalidInput
-from simcore.io.gltf_rig import weightless_joints
+from simcore.io.gltf_rig import root_holds_weight, weightless_joints
 from simcore.metrics.skinning import weight_stats
 from simcore.skinning.postprocess import bind_to_joint
 from simcore.skinning.predict import compute_weights
@@ -47,7 +47,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         max_influences=options.max_influences,
         smooth_iterations=options.smooth_iterations,
         progress=report,
-        root_deforms=state.options.skeleton != "keep",
+        root_deforms=_root_deforms(state),
         exclude=drop | helpers,
     )
     weights = result.weights
@@ -73,6 +73,16 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         "seconds": round(time.perf_counter() - started, 3),
     }
     progress(1.0)
+
+
+def _root_deforms(state: PipelineState) -> bool:
+    """Whether the skeleton's root bends the mesh: a predicted skeleton's does; a kept rig's does when the upload's
+    own weights put more than a trace on it (a toy rig's first bone, a Mixamo Hips root), not when it is an armature
+    root (most artist rigs; a skeleton file without weights is taken as one)."""
+    rig = state.mesh.source_rig if state.mesh is not None else None
+    if state.options.skeleton != "keep":
+        return True
+    return state.inputs.skeleton_path is None and rig is not None and root_holds_weight(rig.weights)
 
 
 def _weightless_in_upload(state: PipelineState) -> np.ndarray:

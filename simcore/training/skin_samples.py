@@ -20,6 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
+from simcore.io.gltf_rig import root_holds_weight
 from simcore.metrics.skinning import protocol_skin_matrices, unit_cube_frame
 from simcore.skeleton.kinematics import global_transforms, random_pose_locals, skinning_matrices
 from simcore.skeleton.types import Skeleton, parents_first_order
@@ -27,7 +28,6 @@ from simcore.skinning.lbs import linear_blend
 from simcore.skinning.pair_features import SkinInputs, skin_inputs
 
 LOSS_POSES = 2
-ARMATURE_SHARE = 0.01  # a root holding at most this share of the weight is an armature root, not a body joint
 
 
 @dataclass
@@ -83,7 +83,7 @@ def rerooted(character: Character) -> Character:
     parents = character.skeleton.parents
     column = np.asarray(character.weights.sum(axis=0)).ravel()
     kids = np.flatnonzero(parents == 0)
-    if (parents < 0).sum() != 1 or not len(kids) or column[0] > ARMATURE_SHARE * column.sum():
+    if (parents < 0).sum() != 1 or not len(kids) or root_holds_weight(character.weights):
         return character
     subtree = column.copy()
     for j in range(len(parents) - 1, 0, -1):  # parents first: children's totals are complete before their parent's

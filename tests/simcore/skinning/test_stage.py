@@ -102,3 +102,16 @@ def test_joints_the_kept_rig_never_weights_get_no_weight(tmp_path: Path) -> None
     stage.run(predicted, StageProgress("skin", 0.0, 1.0, lambda n, f: None, lambda: None))
     assert predicted.weights is not None and predicted.weights[:, ik].sum() > 1.0
     assert predicted.report["skinning"]["weightless_in_upload"] == []
+
+
+def test_a_kept_root_that_holds_weight_keeps_its_weight(dev_assets: Path, tmp_path: Path) -> None:
+    """RiggedSimple's root is its first bone and bends the cylinder's lower half: kept, it keeps that half (an
+    armature root would pass it to the second bone). A predicted or weightless root decides the same way."""
+    from simcore.evaluation.motion_eval import job_rig
+
+    state = job_rig(dev_assets / "rigged_simple.glb", tmp_path, JobOptions(skeleton="keep"))
+    assert state.mesh is not None and state.weights is not None and state.mesh.source_rig is not None
+    lower = state.mesh.vertices[:, 1] < state.mesh.vertices[:, 1].min() + 1e-3
+    assert lower.sum() >= 32 and state.weights[lower, 0].toarray().min() > 0.9
+    l1 = np.abs(state.weights.toarray() - state.mesh.source_rig.weights.toarray()).sum(axis=1).mean()
+    assert l1 < 0.3  # 1.01 when the root was taken for an armature root
