@@ -14,16 +14,16 @@ with the artist-skinned positions (P, V, 3).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
-from simcore.io.gltf_rig import root_holds_weight
+from simcore.io.gltf_rig import root_holds_weight, weightless_joints
 from simcore.metrics.skinning import protocol_skin_matrices, unit_cube_frame
 from simcore.skeleton.kinematics import global_transforms, random_pose_locals, skinning_matrices
-from simcore.skeleton.types import Skeleton, parents_first_order
+from simcore.skeleton.types import JointKind, Skeleton, parents_first_order
 from simcore.skinning.lbs import linear_blend
 from simcore.skinning.pair_features import SkinInputs, skin_inputs
 
@@ -159,10 +159,16 @@ class SkinSample:
                           data["posed"].astype(np.float32), str(data["category"]))
 
 
-def make_sample(character: Character, rng: np.random.Generator, vertices: int) -> SkinSample:
-    """Inputs on the whole (unit-cube) character, then targets for at most `vertices` random vertices."""
+def make_sample(character: Character, rng: np.random.Generator, vertices: int, *, helpers: bool = False) -> SkinSample:
+    """Inputs on the whole (unit-cube) character, then targets for at most `vertices` random vertices. With
+    `helpers`, the joints its weights never use are helpers (JointKind.HELPER: no bone of their own), as a job
+    keeping an uploaded rig skins it."""
     c = normalised(character)
-    inputs = skin_inputs(c.vertices, c.faces, c.skeleton)
+    skeleton = c.skeleton
+    if helpers:
+        out = weightless_joints(c.weights)
+        skeleton = replace(skeleton, kinds=[JointKind.HELPER if h else k for k, h in zip(skeleton.kinds, out)])
+    inputs = skin_inputs(c.vertices, c.faces, skeleton)
     keep = np.sort(rng.choice(len(c.vertices), size=min(vertices, len(c.vertices)), replace=False))
     cand = inputs.candidates[keep]
     dense = c.weights[keep].toarray()

@@ -128,3 +128,19 @@ def test_dropout_acts_in_training_only_and_is_stored_with_the_weights(tmp_path: 
         loaded = load_model(path)
         assert loaded.config.dropout == 0.3 and not loaded.training
         np.testing.assert_allclose(loaded(*args).numpy(), model(*args).numpy(), atol=1e-6)
+
+
+def test_helper_samples_never_offer_a_weightless_joint_as_the_nearest_bone() -> None:
+    """With `helpers`, a joint the artist left unweighted (a pole target at a foot) owns no bone in the sample's
+    inputs, as in a job keeping the rig; without, it is the nearest joint of the vertices around it."""
+    dog = capsule_dog()
+    foot = int(np.argmin(dog.skeleton.positions[:, 1]))
+    s = dog.skeleton
+    pole = Skeleton(np.vstack([s.positions, s.positions[foot]]), np.append(s.parents, 0), [*s.names, "Pole"])
+    weights = sp.hstack([dog.weights, sp.csr_matrix((len(dog.vertices), 1))]).tocsr()
+    c = Character("dog", "quadruped", dog.vertices, dog.faces, pole, weights)
+    plain = make_sample(c, np.random.default_rng(0), 10_000)
+    helped = make_sample(c, np.random.default_rng(0), 10_000, helpers=True)
+    index = pole.num_joints - 1
+    assert (plain.inputs.candidates[:, 0] == index).any()
+    assert not (helped.inputs.candidates[:, 0] == index).any() and np.all(np.isfinite(helped.inputs.pair))
