@@ -25,15 +25,31 @@ class JointSegments:
     owner: np.ndarray
 
 
+def _repeated(positions: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:
+    """(J,) bool: joints whose position another joint shares (within `tolerance` × the skeleton's extent)."""
+    if len(positions) < 2:
+        return np.zeros(len(positions), bool)
+    scale = float(np.ptp(positions, axis=0).max()) or 1.0
+    _, inverse, counts = np.unique(np.round(positions / (tolerance * scale)), axis=0, return_inverse=True, return_counts=True)
+    return counts[inverse.ravel()] > 1
+
+
 def joint_segments(skeleton: Skeleton, leaf_extension: float = 0.5) -> JointSegments:
     """Segments of every joint (at least one each; a lone root gets a point) but helper joints
-    (JointKind.HELPER), which own none: nothing is skinned to them, while their parents' bones to them remain."""
+    (JointKind.HELPER), which own none, so nothing is skinned to them; their parents' bones to them remain, but
+    for a stale helper: one with only helpers below it whose bind position repeats another joint's (exporters
+    write the armature's transform for bones that deform nothing, so a bone to it would cross the body). A joint
+    whose children are all stale helpers ends like a leaf."""
     pos = skeleton.positions
     heads, tails, owner = [], [], []
-    helper = [kind == JointKind.HELPER for kind in skeleton.kinds]
-    for j, kids in enumerate(skeleton.children()):
-        if helper[j]:
+    children = skeleton.children()
+    inert = np.array([kind == JointKind.HELPER for kind in skeleton.kinds]) & _repeated(pos)
+    for j in range(len(children) - 1, -1, -1):  # children first: a helper is inert when all below it are
+        inert[j] &= all(inert[c] for c in children[j])
+    for j, kids in enumerate(children):
+        if skeleton.kinds[j] == JointKind.HELPER:
             continue
+        kids = [c for c in kids if not inert[c]]
         for c in kids:
             heads.append(pos[j])
             tails.append(pos[c])

@@ -13,22 +13,34 @@ from simcore.skinning.bones import joint_segments
 from simcore.skinning.predict import compute_weights
 
 
-def _with_target() -> tuple[np.ndarray, np.ndarray, Skeleton, int]:
-    """The capsule quadruped plus a pole target under the root at its first foot (where it would pull weight)."""
+def _with_target(offset: float = 0.05) -> tuple[np.ndarray, np.ndarray, Skeleton, int]:
+    """The capsule quadruped plus a pole target under the root, `offset` in front of its first foot (where it would
+    pull weight)."""
     vertices, faces, skeleton = quadruped()
     foot = int(np.argmin(skeleton.positions[:, 1]))
-    rig = Skeleton(np.vstack([skeleton.positions, skeleton.positions[foot]]), np.append(skeleton.parents, 0),
-                   [*skeleton.names, "Pole"])
+    rig = Skeleton(np.vstack([skeleton.positions, skeleton.positions[foot] + [0.0, 0.0, offset]]),
+                   np.append(skeleton.parents, 0), [*skeleton.names, "Pole"])
     return vertices, faces, rig, rig.num_joints - 1
+
+
+def _helper(rig: Skeleton, pole: int) -> Skeleton:
+    return Skeleton(rig.positions, rig.parents, rig.names, [JointKind.FREE] * pole + [JointKind.HELPER])
 
 
 def test_a_helper_owns_no_segment_but_its_parents_bone_to_it_remains():
     _, _, rig, pole = _with_target()
-    plain = joint_segments(rig)
-    helper = joint_segments(Skeleton(rig.positions, rig.parents, rig.names, [JointKind.FREE] * pole + [JointKind.HELPER]))
+    plain, helper = joint_segments(rig), joint_segments(_helper(rig, pole))
     assert pole in plain.owner and pole not in helper.owner
     assert len(helper.owner) == len(plain.owner) - 1  # only the pole's own leaf segment went
     assert np.any((helper.owner == 0) & np.all(np.isclose(helper.tails, rig.positions[pole]), axis=1))
+
+
+def test_no_bone_leads_to_a_stale_helper():
+    """A helper at another joint's bind position (an exporter's stale transform) gets no bone from its parent."""
+    _, _, rig, pole = _with_target(offset=0.0)  # exactly on the foot joint
+    plain, helper = joint_segments(rig), joint_segments(_helper(rig, pole))
+    assert len(helper.owner) == len(plain.owner) - 2  # its own leaf segment and the root's bone to it
+    assert not np.any(np.all(np.isclose(helper.tails, rig.positions[pole]), axis=1) & (helper.owner == 0))
 
 
 @pytest.mark.parametrize("method", ["learned", "geodesic", "heat"])
