@@ -18,6 +18,7 @@ from tests.integration.conftest import free_port
 REPO = Path(__file__).resolve().parents[2]
 CHROMIUM = Path(os.environ.get("RIGFORGE_CHROMIUM", "/usr/bin/chromium"))
 ARTIFACTS = REPO / "test-artifacts"
+PAGE_TIMEOUT_MS = 60_000  # every wait and action: the suite's 2-core CI box also runs the service and a browser
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking"]
 
 
@@ -95,6 +96,7 @@ def page(browser, dashboard_server):
     ARTIFACTS.mkdir(exist_ok=True)
     context = browser.new_context(viewport={"width": 1280, "height": 800}, accept_downloads=True, base_url=dashboard_server.url)
     pg = context.new_page()
+    pg.set_default_timeout(PAGE_TIMEOUT_MS)
     pg.external_requests = []
     pg.console_errors = []
     pg.on("request", lambda r: None if r.url.startswith((dashboard_server.url, "blob:", "data:")) else pg.external_requests.append(r.url))
