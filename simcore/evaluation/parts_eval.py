@@ -2,10 +2,11 @@
 
 For every rigged .glb/.gltf in DIR (or the files DIR/MANIFEST.tsv lists for one split) made of several welded
 surface parts, each part that carries weight is counted by its size class (a piece: bounding-box diagonal at
-most MAX_PIECE of the whole mesh's, else large), by how many of the skeleton's joints lie inside its bounding
-box (0, 1, 2 or more) and by whether the artist bound it rigidly (every vertex of the part on one and the same
-joint). The table gives, per class, the parts counted, the share bound rigidly, and the share bound rigidly
-among the parts that lean at least RIGID_SHARE of their weight mass on one joint: the rule's precision.
+most MAX_PIECE of the whole mesh's, else large), by how many joints lie inside its bounding box (0, 1, 2 or more;
+the joints a job keeping the rig skins to, its weightless ones left out) and by whether the artist bound it
+rigidly (every vertex of the part on one and the same joint). The table gives, per class, the parts counted, the
+share bound rigidly, and the share bound rigidly among the parts that lean at least RIGID_SHARE of their weight
+mass on one joint: the rule's precision.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ import scipy.sparse as sp
 
 from simcore.evaluation.assets import rigged_assets
 from simcore.geometry.parts import part_labels
-from simcore.skinning.parts import MAX_PIECE, RIGID_SHARE, part_boxes, rigid_piece_vertices
+from simcore.io.gltf_rig import weightless_joints
+from simcore.skinning.parts import MAX_PIECE, RIGID_SHARE, part_figures, rigid_piece_vertices
 
 HELD_CLASSES = ("0", "1", "2+")
 
@@ -75,24 +77,19 @@ class PartStatistics:
 def rig_parts(name: str, category: str, vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray,
               weights: sp.csr_matrix) -> list[PartRow]:
     """The rows of one rig's weighted parts (none for a mesh of one part). vertices (V, 3), faces (F, 3),
-    joints (J, 3) bind positions, weights (V, J)."""
+    joints (J', 3) positions of the joints a job would skin to, weights (V, J)."""
     labels = part_labels(vertices, faces)
     count = int(labels.max()) + 1 if len(labels) else 0
     if count < 2:
         return []
-    w = sp.csr_matrix(weights)
-    members = sp.csr_matrix((np.ones(len(labels)), (labels, np.arange(len(labels)))), shape=(count, len(labels)))
-    mass = np.asarray((members @ w).todense())
-    lo, hi = part_boxes(vertices, labels, count)
-    whole = float(np.linalg.norm(np.ptp(vertices, axis=0))) or 1.0
-    held = np.all((joints[None] >= lo[:, None]) & (joints[None] <= hi[:, None]), axis=2).sum(axis=1)
+    fig = part_figures(vertices, labels, weights, joints)
+    assert fig.held is not None, "joints were given"
     rigid = np.zeros(count, bool)
-    rigid[labels[rigid_piece_vertices(labels, w)]] = True
+    rigid[labels[rigid_piece_vertices(labels, sp.csr_matrix(weights))]] = True
     sizes = np.bincount(labels, minlength=count)
-    total = mass.sum(axis=1)
-    return [PartRow(name, category, int(sizes[p]), float(np.linalg.norm(hi[p] - lo[p]) / whole), int(held[p]),
-                    float(mass[p].max() / total[p]), bool(rigid[p]))
-            for p in range(count) if total[p] > 0]
+    total = fig.mass.sum(axis=1)
+    return [PartRow(name, category, int(sizes[p]), float(fig.size[p]), int(fig.held[p]), float(fig.mass[p].max() / total[p]),
+                    bool(rigid[p])) for p in range(count) if total[p] > 0]
 
 
 def part_statistics(directory: Path, split: str | None = None,
@@ -102,5 +99,6 @@ def part_statistics(directory: Path, split: str | None = None,
     for name, category, _doc, asset in rigged_assets(Path(directory), report.skipped, split):
         on_asset(name)
         report.rigs += 1
-        report.rows.extend(rig_parts(name, category, asset.vertices, asset.faces, asset.skeleton.positions, asset.weights))
+        skinned = asset.skeleton.positions[~weightless_joints(asset.weights)]  # as a job keeping the rig passes them
+        report.rows.extend(rig_parts(name, category, asset.vertices, asset.faces, skinned, asset.weights))
     return report

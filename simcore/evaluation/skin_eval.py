@@ -251,12 +251,12 @@ def evaluate_skinning(
             clips = clip_skin_matrices(doc, asset)
         except SimcoreError:
             clips = None
+        root_deforms, helpers = root_holds_weight(asset.weights), weightless_joints(asset.weights)  # as a job keeping the rig
         for method in methods:
             started = time.perf_counter()
             try:
                 result = compute_weights(asset.vertices, asset.faces, asset.skeleton, method=method,  # type: ignore[arg-type]
-                                         root_deforms=root_holds_weight(asset.weights),  # as a job keeping this skeleton
-                                         exclude=weightless_joints(asset.weights))
+                                         root_deforms=root_deforms, exclude=helpers)
                 seconds = time.perf_counter() - started
                 metrics = score_weights(asset, result.weights, clips)
                 metrics["seconds"] = seconds

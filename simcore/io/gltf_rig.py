@@ -396,6 +396,11 @@ def rig_rest_matrices(doc: GltfDocument, asset: RiggedAsset, world: np.ndarray |
     return world[asset.joint_nodes] @ np.linalg.inv(asset.bind_matrices)
 
 
+def _weighted(weights: sp.spmatrix, eps: float) -> np.ndarray:
+    """(J,) bool: joints some vertex of the (V, J) weights follows by more than `eps`."""
+    return np.asarray(sp.csr_matrix(weights).max(axis=0).todense()).ravel() > eps
+
+
 ARMATURE_SHARE = 0.01  # a root holding at most this share of the weight is an armature root, not a body joint
 
 
@@ -410,7 +415,7 @@ def weightless_joints(weights: sp.spmatrix, eps: float = 1e-6) -> np.ndarray:
     """(J,) bool: joints of a rig (parents first) that no vertex of its (V, J) weights follows (pole targets,
     bone-end markers, sockets), the root (index 0) aside, which every tree keeps; all False when no joint holds
     weight (an unweighted skin tells nothing)."""
-    held = np.asarray(sp.csr_matrix(weights).max(axis=0).todense()).ravel() > eps
+    held = _weighted(weights, eps)
     out = ~held if held.any() else np.zeros(len(held), bool)
     out[:1] = False
     return out
@@ -418,7 +423,7 @@ def weightless_joints(weights: sp.spmatrix, eps: float = 1e-6) -> np.ndarray:
 
 def used_joints(skeleton: Skeleton, weights: sp.csr_matrix, eps: float = 1e-6) -> np.ndarray:
     """(J,) bool: joints that influence a vertex or have a descendant that does."""
-    keep = np.asarray(weights.max(axis=0).todense()).ravel() > eps
+    keep = _weighted(weights, eps)
     for jnt in np.flatnonzero(keep):
         p = skeleton.parents[jnt]
         while p >= 0 and not keep[p]:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 
 import numpy as np
@@ -166,6 +166,10 @@ class Skeleton:
             file_parents = np.where(self.file_parents[order] >= 0, inverse[np.maximum(self.file_parents[order], 0)], -1)
         return Skeleton(self.positions[order], parents, [self.names[i] for i in order], [self.kinds[i] for i in order],
                         orient, file_order, file_parents)
+
+    def with_helpers(self, helpers: np.ndarray) -> Skeleton:
+        """The same tree with the joints where (J,) bool `helpers` is set marked JointKind.HELPER (no bone to skin to)."""
+        return replace(self, kinds=[JointKind.HELPER if h else kind for kind, h in zip(self.kinds, helpers, strict=True)])
 
     def without(self, drop: np.ndarray) -> tuple[Skeleton, np.ndarray]:
         """(the tree of the joints not in `drop`, their indices here). drop: (J,) bool, never the root. Each kept

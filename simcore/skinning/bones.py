@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import JointKind, Skeleton
 
 ROWS = 8192  # points per block in closest_on_segments
@@ -25,13 +26,10 @@ class JointSegments:
     owner: np.ndarray
 
 
-def _repeated(positions: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:
-    """(J,) bool: joints whose position another joint shares (within `tolerance` × the skeleton's extent)."""
-    if len(positions) < 2:
-        return np.zeros(len(positions), bool)
-    scale = float(np.ptp(positions, axis=0).max()) or 1.0
-    _, inverse, counts = np.unique(np.round(positions / (tolerance * scale)), axis=0, return_inverse=True, return_counts=True)
-    return counts[inverse.ravel()] > 1
+def _repeated(positions: np.ndarray) -> np.ndarray:
+    """(J,) bool: joints whose position another joint shares (welded within `weld_vertices`' tolerance)."""
+    index = weld_vertices(positions, np.zeros((0, 3), np.int64)).index
+    return np.bincount(index, minlength=len(positions))[index] > 1
 
 
 def joint_segments(skeleton: Skeleton, leaf_extension: float = 0.5) -> JointSegments:

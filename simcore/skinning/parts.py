@@ -15,6 +15,8 @@ part. A mesh of one piece is left as it is.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -22,37 +24,52 @@ RIGID_SHARE = 0.5  # a part with at least this share of its weight mass on one j
 MAX_PIECE = 0.35  # only parts whose box diagonal is at most this share of the whole mesh's are pieces
 
 
-def part_boxes(vertices: np.ndarray, labels: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """(parts, 3) lowest and highest corners of each part's bounding box."""
+@dataclass
+class PartFigures:
+    """Per connected part: mass (parts, J) its weight mass on each joint; size (parts,) its bounding-box diagonal over
+    the whole mesh's; held (parts,) the given joints inside its box (None when none were given)."""
+
+    mass: np.ndarray
+    size: np.ndarray
+    held: np.ndarray | None
+
+
+def part_figures(vertices: np.ndarray, labels: np.ndarray, weights: sp.spmatrix, joints: np.ndarray | None = None) -> PartFigures:
+    """The figures the rigid-part rule reads, for (V, 3) vertices, their (V,) part labels, (V, J) weights and
+    optionally (J', 3) joint positions."""
+    count = int(labels.max()) + 1 if len(labels) else 0
+    members = sp.csr_matrix((np.ones(len(labels)), (labels, np.arange(len(labels)))), shape=(count, len(labels)))
+    mass = np.asarray((members @ sp.csr_matrix(weights)).todense())
     lo = np.full((count, 3), np.inf)
     hi = np.full((count, 3), -np.inf)
     np.minimum.at(lo, labels, vertices)
     np.maximum.at(hi, labels, vertices)
-    return lo, hi
+    whole = float(np.linalg.norm(np.ptp(vertices, axis=0))) if len(vertices) else 0.0
+    held = None
+    if joints is not None:
+        j = np.asarray(joints, np.float64).reshape(-1, 3)
+        held = np.all((j[None] >= lo[:, None]) & (j[None] <= hi[:, None]), axis=2).sum(axis=1)
+    return PartFigures(mass, np.linalg.norm(hi - lo, axis=1) / (whole or 1.0), held)
 
 
 def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_matrix, joints: np.ndarray | None = None,
                      share: float = RIGID_SHARE, max_size: float = MAX_PIECE) -> sp.csr_matrix:
     """(V, J) CSR `weights` with every part that puts at least `share` of its weight mass on one joint, or that
-    holds none of `joints` (J, 3) in its box, bound to that joint alone (see the module docstring). vertices
-    (V, 3): the mesh the weights are for; labels (V,) int: its `part_labels`."""
+    holds none of `joints` (J', 3) in its box, bound to that joint alone, large parts only when they hold at most
+    one (see the module docstring). vertices (V, 3): the mesh the weights are for; labels (V,) int: its
+    `part_labels`."""
     count = int(labels.max()) + 1 if len(labels) else 0
     if count < 2:
         return weights
     w = sp.csr_matrix(weights)
-    members = sp.csr_matrix((np.ones(len(labels)), (labels, np.arange(len(labels)))), shape=(count, len(labels)))
-    mass = np.asarray((members @ w).todense())  # (parts, J)
-    total = mass.sum(axis=1)
-    top = mass.argmax(axis=1)
-    lo, hi = part_boxes(vertices, labels, count)
-    whole = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
-    leaning = mass[np.arange(count), top] >= share * total
-    small = np.linalg.norm(hi - lo, axis=1) / whole <= max_size
-    if joints is not None and len(joints):
-        within = (np.asarray(joints)[None] >= lo[:, None]) & (np.asarray(joints)[None] <= hi[:, None])  # (parts, J, 3)
-        held = np.all(within, axis=2).sum(axis=1)
-        leaning |= held == 0
-        small |= held <= 1
+    fig = part_figures(vertices, labels, w, joints)
+    total = fig.mass.sum(axis=1)
+    top = fig.mass.argmax(axis=1)
+    leaning = fig.mass[np.arange(count), top] >= share * total
+    small = fig.size <= max_size
+    if fig.held is not None:
+        leaning |= fig.held == 0
+        small |= fig.held <= 1
     rigid = (total > 0) & leaning & small
     rows = np.flatnonzero(rigid[labels])
     if not len(rows):

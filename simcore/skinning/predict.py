@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import threading
 import time
 from collections.abc import Callable
@@ -111,7 +110,7 @@ def compute_weights(
         if exclude[0]:
             raise InvalidInput(f"the root joint {skeleton.names[0]!r} cannot be left out; every vertex needs a joint to follow",
                                code="invalid_option", field="options.exclude_joints")
-        skeleton = dataclasses.replace(skeleton, kinds=[JointKind.HELPER if out else kind for kind, out in zip(skeleton.kinds, exclude)])
+        skeleton = skeleton.with_helpers(exclude)
     if method != "auto" and method not in METHODS:
         raise InvalidInput(f"unknown skinning method {method!r}; use auto, {', '.join(METHODS)}", code="invalid_option", field="skinning")
     reason, use_learned = "", False

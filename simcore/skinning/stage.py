@@ -1,10 +1,11 @@
 """The `skin` pipeline stage: weights for the ingested mesh on the stage-2 skeleton.
 
 A ground plane the skeleton stage found (state.ground_faces) is left out of the weights and bound to the root.
-Joints matching options.exclude_joints (a kept rig's IK targets and controls) get no weight: the weights are
-computed on the tree without them and they keep empty columns. So do, with `skeleton: keep`, the joints the
-upload's own weights never use: pole targets, bone-end markers and sockets, whose bind transforms exporters often
-leave at an armature root or the origin, where they would pull whatever mesh lies there.
+Joints matching options.exclude_joints (a kept rig's IK targets and controls) get no weight: they stay in the
+tree as helpers (no bone of their own, `compute_weights(exclude=...)`) and keep empty columns. So do, with
+`skeleton: keep`, the joints the upload's own weights never use: pole targets, bone-end markers and sockets, whose
+bind transforms exporters often leave at an armature root or the origin, where they would pull whatever mesh lies
+there.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from simcore.skinning.postprocess import bind_to_joint
 from simcore.skinning.predict import compute_weights
 
 if TYPE_CHECKING:
+    from simcore.io.gltf_rig import RiggedAsset
     from simcore.pipeline import PipelineState, StageProgress
 
 
@@ -75,23 +77,28 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     progress(1.0)
 
 
+def _kept_rig(state: PipelineState) -> RiggedAsset | None:
+    """The upload's own rig when the job keeps its skeleton (not a skeleton file), else None."""
+    assert state.mesh is not None, "run() checked it"
+    keeping = state.options.skeleton == "keep" and state.inputs.skeleton_path is None
+    return state.mesh.source_rig if keeping else None
+
+
 def _root_deforms(state: PipelineState) -> bool:
     """Whether the skeleton's root bends the mesh: a predicted skeleton's does; a kept rig's does when the upload's
     own weights put more than a trace on it (a toy rig's first bone, a Mixamo Hips root), not when it is an armature
     root (most artist rigs; a skeleton file without weights is taken as one)."""
-    rig = state.mesh.source_rig if state.mesh is not None else None
     if state.options.skeleton != "keep":
         return True
-    return state.inputs.skeleton_path is None and rig is not None and root_holds_weight(rig.weights)
+    rig = _kept_rig(state)
+    return rig is not None and root_holds_weight(rig.weights)
 
 
 def _weightless_in_upload(state: PipelineState) -> np.ndarray:
-    """(J,) bool: with `skeleton: keep`, the kept rig's joints that its own weights never use (but the root)."""
-    assert state.skeleton is not None and state.mesh is not None, "run() checked it"
-    rig = state.mesh.source_rig
-    if state.options.skeleton != "keep" or state.inputs.skeleton_path is not None or rig is None:
-        return np.zeros(state.skeleton.num_joints, bool)
-    return weightless_joints(rig.weights)
+    """(J,) bool: the kept rig's joints that its own weights never use (but the root); none for other skeletons."""
+    assert state.skeleton is not None, "run() checked it"
+    rig = _kept_rig(state)
+    return weightless_joints(rig.weights) if rig is not None else np.zeros(state.skeleton.num_joints, bool)
 
 
 def _excluded(state: PipelineState) -> np.ndarray:

@@ -14,7 +14,7 @@ with the artist-skinned positions (P, V, 3).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 from simcore.io.gltf_rig import root_holds_weight, weightless_joints
 from simcore.metrics.skinning import protocol_skin_matrices, unit_cube_frame
 from simcore.skeleton.kinematics import global_transforms, random_pose_locals, skinning_matrices
-from simcore.skeleton.types import JointKind, Skeleton, parents_first_order
+from simcore.skeleton.types import Skeleton, parents_first_order
 from simcore.skinning.lbs import linear_blend
 from simcore.skinning.pair_features import SkinInputs, skin_inputs
 
@@ -164,10 +164,7 @@ def make_sample(character: Character, rng: np.random.Generator, vertices: int, *
     `helpers`, the joints its weights never use are helpers (JointKind.HELPER: no bone of their own), as a job
     keeping an uploaded rig skins it."""
     c = normalised(character)
-    skeleton = c.skeleton
-    if helpers:
-        out = weightless_joints(c.weights)
-        skeleton = replace(skeleton, kinds=[JointKind.HELPER if h else k for k, h in zip(skeleton.kinds, out)])
+    skeleton = c.skeleton.with_helpers(weightless_joints(c.weights)) if helpers else c.skeleton
     inputs = skin_inputs(c.vertices, c.faces, skeleton)
     keep = np.sort(rng.choice(len(c.vertices), size=min(vertices, len(c.vertices)), replace=False))
     cand = inputs.candidates[keep]

@@ -24,7 +24,9 @@ def _with_target(offset: float = 0.05) -> tuple[np.ndarray, np.ndarray, Skeleton
 
 
 def _helper(rig: Skeleton, pole: int) -> Skeleton:
-    return Skeleton(rig.positions, rig.parents, rig.names, [JointKind.FREE] * pole + [JointKind.HELPER])
+    helper = rig.with_helpers(np.arange(rig.num_joints) == pole)
+    assert helper.kinds[pole] == JointKind.HELPER and JointKind.HELPER not in helper.kinds[:pole]
+    return helper
 
 
 def test_a_helper_owns_no_segment_but_its_parents_bone_to_it_remains():
