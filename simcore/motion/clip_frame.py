@@ -5,8 +5,32 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from simcore.geometry.similarity import similarity_fit
 from simcore.motion.types import JointAnimation, MotionClip
 from simcore.skeleton.types import Skeleton
+
+AXIS_REACH = 0.1  # × the skeleton's span: how far along each joint frame's axes the fit's extra points lie
+
+
+def _frame_points(heads: np.ndarray, orientations: np.ndarray | None) -> np.ndarray:
+    """The joints' `heads` (J, 3), plus (with `orientations`, (J, 4) xyzw) a point along each axis of every joint
+    frame, AXIS_REACH of the span of the heads away: points that fix a rotation even when the heads lie on one line."""
+    if orientations is None:
+        return heads
+    span = float(np.linalg.norm(heads[:, None] - heads[None], axis=2).max()) or 1.0
+    axes = Rotation.from_quat(orientations).as_matrix()  # (J, 3, 3): columns are the frame's axes
+    return np.vstack([heads, *(heads + AXIS_REACH * span * axes[:, :, k] for k in range(3))])
+
+
+def skeleton_similarity(source: Skeleton, target: Skeleton, order: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """(s, R, t) taking `source`'s bind pose onto `target`'s, where source joint i is target joint order[i]:
+    fitted to the heads and, when both skeletons carry their joint frames, to points along those frames' axes.
+    Heads alone leave a rotation about their line free (a two-bone rig), which could turn a clip's bends the
+    other way."""
+    if source.orientations is None or target.orientations is None:
+        return similarity_fit(source.positions, target.positions[order])
+    return similarity_fit(_frame_points(source.positions, source.orientations),
+                          _frame_points(target.positions[order], target.orientations[order]))
 
 
 def transform_clip(clip: MotionClip, scale: float, rotation: np.ndarray, translation: np.ndarray) -> MotionClip:

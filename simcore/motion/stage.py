@@ -60,8 +60,7 @@ def load_uploaded_clip(path: Path, fmt: str | None, state: PipelineState) -> Mot
 
 def clip_from_mesh_upload(state: PipelineState) -> MotionClip:
     """The clip `options.motion.clip` names inside the mesh upload, moved into the ingested mesh's frame."""
-    from simcore.geometry.similarity import similarity_fit
-    from simcore.motion.clip_frame import transform_clip
+    from simcore.motion.clip_frame import skeleton_similarity, transform_clip
     from simcore.motion.gltf_clips import read_gltf_clip
 
     mesh = state.mesh
@@ -74,7 +73,7 @@ def clip_from_mesh_upload(state: PipelineState) -> MotionClip:
     if rig is not None and rig.skeleton.num_joints == clip.skeleton.num_joints:
         order = [rig.skeleton.names.index(n) for n in clip.skeleton.names] if set(rig.skeleton.names) == set(clip.skeleton.names) else None
         if order is not None:
-            s, r, t = similarity_fit(clip.skeleton.positions, rig.skeleton.positions[order])
+            s, r, t = skeleton_similarity(clip.skeleton, rig.skeleton, np.asarray(order))
             clip = replace(transform_clip(clip, s, r, t), shares_bind_pose=True)  # the mesh's own bind pose, in its frame
     return clip
 

@@ -126,3 +126,21 @@ def test_clip_of_the_mesh_upload_on_an_auto_skeleton_shares_its_bind_pose(tmp_pa
     target = replace(low_hips, positions=low_hips.positions * [1.0, 0.9, 1.0])
     assert retarget(clip, target).root_scale == 1.0
     assert retarget(replace(clip, shares_bind_pose=False), target).root_scale == pytest.approx(0.9, rel=0.05)
+
+
+def test_a_two_bone_uploads_clip_keeps_the_turn_of_its_joint_frames(tmp_path, dev_assets):
+    """RiggedSimple's two joints lie on one line, which leaves a fit to their heads free to turn about it (a half
+    turn made its bend go the other way): the clip's joint frames must land on the ingested rig's."""
+    from scipy.spatial.transform import Rotation
+
+    from simcore.ingest import ingest
+
+    mesh = ingest((dev_assets / "rigged_simple.glb").read_bytes(), "glb")
+    assert mesh.source_rig is not None and mesh.source_rig.skeleton.orientations is not None
+    state = PipelineState(PipelineInputs(tmp_path / "rigged_simple.glb", "glb"), JobOptions(motion={"clip": 0}), tmp_path, mesh=mesh)
+    clip = stage.clip_from_mesh_upload(state)
+    assert clip.shares_bind_pose and clip.skeleton.orientations is not None
+    rig = mesh.source_rig.skeleton
+    order = [rig.names.index(n) for n in clip.skeleton.names]
+    apart = Rotation.from_quat(clip.skeleton.orientations) * Rotation.from_quat(rig.orientations[order]).inv()
+    assert np.degrees(apart.magnitude()).max() < 0.1
