@@ -72,8 +72,13 @@ def mirror_twins(positions: np.ndarray, parents: np.ndarray, grid: VoxelGrid, pl
     root -1) in the solid `grid`. With `names`, `Left…`/`Right…` pairs (a template's: LeftHandIndex1 and
     RightHandIndex1) are matched first, as neighbouring fingers' mirror images nearly coincide; they must still
     pass the distance test."""
+    return twins_at_scale(positions, parents, _solid_size(grid), plane, names)
+
+
+def twins_at_scale(positions: np.ndarray, parents: np.ndarray, scale: float, plane: MirrorPlane,
+                   names: list[str] | None = None) -> MirrorTwins:
+    """`mirror_twins` with the body's size (metres) given instead of read off a solid."""
     pos = np.asarray(positions, dtype=np.float64)
-    scale = _solid_size(grid)
     own = np.arange(len(pos))
     up = np.where(np.asarray(parents) >= 0, parents, own)  # the root stands in for its own parent
     apart = np.linalg.norm(plane.reflect(pos)[:, None] - pos[None], axis=2)

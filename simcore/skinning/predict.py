@@ -24,6 +24,7 @@ from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
 from simcore.skinning.learned import learned_summary, learned_weights
+from simcore.skinning.mirror_weights import weight_mirror
 from simcore.skinning.parts import bind_rigid_parts
 from simcore.skinning.postprocess import SMOOTH_ITERATIONS, normalize_rows, smooth_on_surface, top_k
 from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
@@ -56,6 +57,7 @@ class SkinningResult:
     method: str
     scores: dict[str, dict[str, float]] = field(default_factory=dict)
     reason: str = ""
+    mirror: dict[str, object] | None = None  # report of `mirror_weights` when the weights were mirrored, else None
 
 
 def _check_inputs(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, max_influences: int) -> tuple[np.ndarray, np.ndarray]:
@@ -131,6 +133,7 @@ def compute_weights(
     first = np.unique(welded.index, return_index=True)[1]  # one original vertex per welded vertex
     reach = SMOOTH_REACH * float(np.ptp(welded.vertices, axis=0).max())
     helpers = np.array([kind == JointKind.HELPER for kind in skeleton.kinds])
+    mirror = weight_mirror(welded.vertices, skeleton)  # None: the character is not symmetric
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
@@ -142,7 +145,8 @@ def compute_weights(
         # Smooth on the welded surface so seam duplicates stay identical, then map back.
         on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
         on_welded[welded.index] = dense
-        dense = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH, welded.vertices, reach)[welded.index]
+        smoothed = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH, welded.vertices, reach)
+        dense = (smoothed if mirror is None else mirror.apply(smoothed))[welded.index]
         weights = top_k(dense, max_influences)
         seconds = time.perf_counter() - started
         step(0.9)
@@ -174,7 +178,8 @@ def compute_weights(
     # separate pieces mostly on one joint, or holding none, follow one; the parts come from the weld above unless that was the proxy's
     labels = part_labels(mesh.vertices, mesh.faces) if on_proxy else welded_part_labels(welded, adj)
     weights = bind_rigid_parts(mesh.vertices, labels, weights, skeleton.positions[~helpers])  # helpers hold no part
-    return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason)
+    return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason,
+                          None if mirror is None else mirror.report())
 
 
 class _MethodProgress:

@@ -66,6 +66,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         "requested": options.skinning,
         "method": result.method,
         "reason": result.reason,
+        "mirror": result.mirror,
         "max_influences": options.max_influences,
         "smooth_iterations": options.smooth_iterations,
         "excluded_joints": [name for name, out in zip(state.skeleton.names, drop) if out],
