@@ -7,8 +7,9 @@ leaves the two sides a little different, which shows as a crease on one side onl
 mid-plane on a coarse mesh whose two sides share an edge. When the mesh is its own mirror image
 (`skeleton.symmetry.body_mirror`), joints are paired with their mirror twins (their positions mirror within
 JOINT_MATCH of the size, and a twin's parent is the parent's twin, so each bone maps to its mirror bone) and
-vertices with theirs (mirror images within VERTEX_MATCH, both ways); a vertex whose weights and whose twin's
-lie on twinned joints only takes the mean of its row and its twin's with the columns swapped left for right.
+vertices with theirs (mirror images within VERTEX_MATCH, both ways: a mesh modelled with a mirror; at least
+MIN_TWINNED of them, else nothing is mirrored); a vertex whose weights and whose twin's lie on twinned joints
+only takes the mean of its row and its twin's with the columns swapped left for right.
 The weights are mirrored last, after the surface smoothing (whose triangulation may differ a little between the
 sides), and before each row keeps its largest influences.
 """
@@ -26,6 +27,9 @@ from simcore.skeleton.types import Skeleton
 
 JOINT_MATCH = 0.02  # × size: a joint's mirror image lies this close to its twin
 VERTEX_MATCH = 1e-3  # × size: a vertex's mirror image this close to another vertex makes them twins
+# Share of the vertices that must have a twin: a mesh whose sides were triangulated apart has twins only here and
+# there, and averaging those rows alone would make them differ from their neighbours' (a patchy stretch).
+MIN_TWINNED = 0.5
 
 
 @dataclass(frozen=True)
@@ -70,7 +74,7 @@ def weight_mirror(vertices: np.ndarray, skeleton: Skeleton) -> WeightMirror | No
     twin = _bone_twins(twin, skeleton)
     distance, nearest = cKDTree(v).query(plane.reflect(v))
     mutual = (distance <= VERTEX_MATCH * size) & (nearest[nearest] == np.arange(len(v)))
-    if not mutual.any() or not np.any(twin >= 0):
+    if mutual.mean() < MIN_TWINNED or not np.any(twin >= 0):
         return None
     return WeightMirror(plane, np.where(mutual, nearest, -1), twin)
 
