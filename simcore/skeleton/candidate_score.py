@@ -27,11 +27,10 @@ from simcore.metrics.skeleton import bone_points
 from simcore.skeleton.medial import medial_voxels
 from simcore.skeleton.mirror import MirrorPlane
 from simcore.skeleton.symmetry import body_mirror
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import SHORT_BONE, Skeleton
 
 WEIGHTS = {"inside": 1.0, "medial_gap": -1.0, "off_medial": -5.0, "asymmetry": -5.0, "stacked": -1.0}
 LOG_PROB_WEIGHT = 0.1
-SHORT_BONE = 0.01
 
 
 @dataclass(frozen=True)

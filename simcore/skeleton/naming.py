@@ -19,14 +19,13 @@ import numpy as np
 from simcore.motion.joint_map import skeleton_slots
 from simcore.skeleton.body_plan import BodyPlan, body_plan, unique_names
 from simcore.skeleton.bone_maps import Preset, chain_names, slot_name
-from simcore.skeleton.types import Skeleton, tree_depths
+from simcore.skeleton.types import SHORT_BONE, Skeleton, tree_depths
 
 HUMANOID_SLOTS = {"Hips", "Head", "LeftUpLeg", "RightUpLeg", "LeftLeg", "RightLeg", "LeftArm", "RightArm",
                   "LeftForeArm", "RightForeArm"}
 LEG_SLOTS = ("UpLeg", "Leg", "Foot", "ToeBase", "Toe_End")
 ARM_SLOTS = {2: ("Arm", "ForeArm"), 3: ("Arm", "ForeArm", "Hand"), 4: ("Shoulder", "Arm", "ForeArm", "Hand")}
 PLACEHOLDER = re.compile(r"^(joint|bone|node|extra|root)[\d_]*(dup[\d_]*)?$", re.IGNORECASE)
-SHORT_BONE = 0.01  # limb joints closer than this share of the size to their parent take no limb slot
 UPRIGHT = 0.8  # a humanoid's head is above its hips: the root-to-head line's vertical share at least this
 # Rotation taking each candidate up axis onto +Y (right-handed), for reading a rig modelled with another up.
 UP_READINGS = {
@@ -45,7 +44,7 @@ class Naming:
 
 
 def _limb_joints(skeleton: Skeleton, path: list[int]) -> list[int]:
-    """`path` without its near-zero-length joints (RigNet's duplicated joints)."""
+    """`path` without its near-zero-length joints (RigNet's duplicated joints): they take no limb slot."""
     size = max(float(np.ptp(skeleton.positions, axis=0).max()), 1e-9)
     pos, parents = skeleton.positions, skeleton.parents
     return [j for j in path if np.linalg.norm(pos[j] - pos[parents[j]]) > SHORT_BONE * size]

@@ -9,6 +9,8 @@ import numpy as np
 
 from simcore.errors import InvalidInput
 
+SHORT_BONE = 0.01  # × the skeleton's size: a bone shorter than this repeats its joint (RigNet's duplicates)
+
 
 def ancestors(parents: np.ndarray, j: int) -> list[int]:
     """[j, parent(j), ..., its root]."""
