@@ -136,11 +136,12 @@ def test_a_two_bone_uploads_clip_keeps_the_turn_of_its_joint_frames(tmp_path, de
     from simcore.ingest import ingest
 
     mesh = ingest((dev_assets / "rigged_simple.glb").read_bytes(), "glb")
-    assert mesh.source_rig is not None and mesh.source_rig.skeleton.orientations is not None
+    assert mesh.source_rig is not None
     state = PipelineState(PipelineInputs(tmp_path / "rigged_simple.glb", "glb"), JobOptions(motion={"clip": 0}), tmp_path, mesh=mesh)
     clip = stage.clip_from_mesh_upload(state)
     assert clip.shares_bind_pose and clip.skeleton.orientations is not None
     rig = mesh.source_rig.skeleton
+    assert rig.orientations is not None
     order = [rig.names.index(n) for n in clip.skeleton.names]
     apart = Rotation.from_quat(clip.skeleton.orientations) * Rotation.from_quat(rig.orientations[order]).inv()
     assert np.degrees(apart.magnitude()).max() < 0.1
