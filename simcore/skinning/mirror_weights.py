@@ -44,13 +44,14 @@ class WeightMirror:
         """(V, J) copy of `weights` with each twinned vertex's row averaged with its twin's, mirrored, where both
         rows weight twinned joints only."""
         out = np.array(weights, dtype=np.float64, copy=True)
-        on_twinned = ~np.any(weights[:, self.joint_twin < 0] > 0.0, axis=1)
+        unpaired = self.joint_twin < 0
+        on_twinned = ~np.any(weights[:, unpaired] > 0.0, axis=1) if unpaired.any() else np.ones(len(weights), bool)
         rows = np.flatnonzero((self.vertex_twin >= 0) & on_twinned)
         rows = rows[on_twinned[self.vertex_twin[rows]]]
-        paired = np.flatnonzero(self.joint_twin >= 0)
-        mirrored = np.zeros((len(rows), out.shape[1]))
-        mirrored[:, self.joint_twin[paired]] = weights[self.vertex_twin[rows]][:, paired]  # j's column → j's twin's
-        out[rows] = 0.5 * (weights[rows] + mirrored)
+        # twins swap in pairs, so column j of the mirrored row is the twin vertex's column twin[j] (an unpaired
+        # joint's column is zero on these rows and maps to itself)
+        columns = np.where(unpaired, np.arange(len(self.joint_twin)), self.joint_twin)
+        out[rows] = 0.5 * (out[rows] + weights[np.ix_(self.vertex_twin[rows], columns)])
         return out
 
     def report(self) -> dict[str, object]:
