@@ -9,15 +9,16 @@ from simcore.geometry.similarity import similarity_fit
 from simcore.motion.types import JointAnimation, MotionClip
 from simcore.skeleton.types import Skeleton
 
-AXIS_REACH = 0.1  # × the skeleton's span: how far along each joint frame's axes the fit's extra points lie
+AXIS_REACH = 0.2  # × the heads' reach from their centroid: how far along each joint frame's axes the fit's extra points lie
 
 
 def _frame_points(heads: np.ndarray, orientations: np.ndarray | None) -> np.ndarray:
     """The joints' `heads` (J, 3), plus (with `orientations`, (J, 4) xyzw) a point along each axis of every joint
-    frame, AXIS_REACH of the span of the heads away: points that fix a rotation even when the heads lie on one line."""
+    frame, AXIS_REACH of the heads' reach from their centroid away (a length a similarity scales with the skeleton):
+    points that fix a rotation even when the heads lie on one line."""
     if orientations is None:
         return heads
-    span = float(np.linalg.norm(heads[:, None] - heads[None], axis=2).max()) or 1.0
+    span = float(np.linalg.norm(heads - heads.mean(axis=0), axis=1).max()) or 1.0
     axes = Rotation.from_quat(orientations).as_matrix()  # (J, 3, 3): columns are the frame's axes
     return np.vstack([heads, *(heads + AXIS_REACH * span * axes[:, :, k] for k in range(3))])
 

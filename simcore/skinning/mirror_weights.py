@@ -91,12 +91,11 @@ def _bone_twins(twin: np.ndarray, skeleton: Skeleton) -> np.ndarray:
         hosts = {int(parents[twin[c]]) for c in children[j] if twin[c] >= 0}
         if len(hosts) == 1 and (host := hosts.pop()) >= 0 and twin[j] == j and twin[host] == host and host != j:
             twin[j], twin[host] = host, j
-    up = np.where(parents >= 0, parents, -1)
     while True:  # a joint whose parent has no twin, or the wrong one, loses its own (and so on down the tree)
         own = twin >= 0
-        twin_up = np.where(up >= 0, twin[np.maximum(up, 0)], -1)  # the parent's twin (-1: root or none)
-        good = own & (twin[np.maximum(twin, 0)] == np.arange(len(twin))) & (up[np.maximum(twin, 0)] == twin_up)
-        good &= (up < 0) | (twin_up >= 0)
+        twin_up = np.where(parents >= 0, twin[np.maximum(parents, 0)], -1)  # the parent's twin (-1: root or none)
+        good = own & (twin[np.maximum(twin, 0)] == np.arange(len(twin))) & (parents[np.maximum(twin, 0)] == twin_up)
+        good &= (parents < 0) | (twin_up >= 0)
         bad = own & ~good
         if not bad.any():
             return twin

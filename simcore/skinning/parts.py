@@ -27,7 +27,7 @@ MAX_PIECE = 0.35  # only parts whose box diagonal is at most this share of the w
 @dataclass
 class PartFigures:
     """Per connected part: mass (parts, J) its weight mass on each joint; size (parts,) its bounding-box diagonal over
-    the whole mesh's; held (parts,) the given joints inside its box (None when none were given)."""
+    the whole mesh's; held (parts,) the given joints inside its box (None when no joint was given)."""
 
     mass: np.ndarray
     size: np.ndarray
@@ -46,7 +46,7 @@ def part_figures(vertices: np.ndarray, labels: np.ndarray, weights: sp.spmatrix,
     np.maximum.at(hi, labels, vertices)
     whole = float(np.linalg.norm(np.ptp(vertices, axis=0))) if len(vertices) else 0.0
     held = None
-    if joints is not None:
+    if joints is not None and len(joints):
         j = np.asarray(joints, np.float64).reshape(-1, 3)
         held = np.all((j[None] >= lo[:, None]) & (j[None] <= hi[:, None]), axis=2).sum(axis=1)
     return PartFigures(mass, np.linalg.norm(hi - lo, axis=1) / (whole or 1.0), held)

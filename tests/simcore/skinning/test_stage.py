@@ -28,6 +28,7 @@ def test_skin_stage_sets_weights_and_reports_scores(tmp_path: Path) -> None:
     report = state.report["skinning"]
     assert report["method"] == "learned" and set(report["scores"]) == {"learned"} and report["reason"].startswith("learned model")
     assert report["weights"]["unweighted_vertices"] == 0 and report["weights"]["max_influences"] <= 4
+    assert report["mirror"] == {"axis": "z", "vertices": pytest.approx(1.0, abs=0.01), "joints": skeleton.num_joints}
     assert {"omega_orth", "kappa_log", "h_spec", "strain_mean", "score"} <= set(report["scores"]["learned"])
     assert seen[-1] == pytest.approx(0.6) and seen == sorted(seen)
 
