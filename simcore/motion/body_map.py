@@ -13,18 +13,28 @@ from __future__ import annotations
 import numpy as np
 
 from simcore.skeleton.types import Skeleton, ancestors, is_at_or_below, tree_depths
-from simcore.skinning.bones import joint_distances, joint_segments
+from simcore.skinning.bones import JointSegments, joint_distances, joint_segments
 
 SAMPLES = (0.25, 0.5, 0.75)  # points along each target bone compared with the source's bones
+TIE_BREAK = 1e-6  # weight of the distance to source bone middles, which only decides equal bone distances
 
 
 def _region_cost(source: Skeleton, target: Skeleton) -> np.ndarray:
-    """(Jt, Js) mean distance from points along each target joint's bones to each source joint's bones."""
+    """(Jt, Js) mean distance from points along each target joint's bones to each source joint's bones, plus
+    TIE_BREAK × the mean distance to the middles of those bones.
+
+    A target bone whose points all lie nearest a source joint's head is exactly as near the source bone ending
+    there as the one starting there; which one wins would then follow rounding. The middles' term decides such
+    ties for the source bone that lies more towards the target bone, and is too small to reorder any other pair.
+    """
     seg = joint_segments(target)
     fractions = np.asarray(SAMPLES)[:, None, None]
     points = (seg.heads[None] + fractions * (seg.tails - seg.heads)[None]).reshape(-1, 3)
     owner = np.tile(seg.owner, len(SAMPLES))
-    dist = joint_distances(points, joint_segments(source), source.num_joints)  # (P, Js)
+    bones = joint_segments(source)
+    middles = 0.5 * (bones.heads + bones.tails)
+    dist = joint_distances(points, bones, source.num_joints)  # (P, Js)
+    dist += TIE_BREAK * joint_distances(points, JointSegments(middles, middles, bones.owner), source.num_joints)
     total = np.zeros((target.num_joints, source.num_joints))
     np.add.at(total, owner, dist)
     return total / np.bincount(owner, minlength=target.num_joints)[:, None]

@@ -175,3 +175,20 @@ def test_a_target_root_sharing_its_source_joint_with_its_child_is_carried_by_it(
     # Rigid with the source joint; the floor correction may lift the whole pose, so compare from the root.
     np.testing.assert_allclose(world[:, :3, 3] - world[0, :3, 3], expected - expected[0], atol=1e-9)
     assert world[0, 0, 3] == pytest.approx(expected[0, 0], abs=1e-9)  # the root swung out with the head
+
+
+def test_a_bone_equally_near_two_source_bones_takes_the_one_lying_towards_it():
+    """A target bone in the wedge outside a source joint is nearest that joint's head on both the source bone
+    ending there and the one starting there: the tie goes to the bone whose middle lies nearer, the same way in
+    every placement of the pair (without a tie-break, rounding chose differently from one placement to the next)."""
+    source = Skeleton(np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 2.0, 0.0]]), np.array([-1, 0, 1]),
+                      ["body", "leg", "foot"]).validate()
+    target = Skeleton(np.array([[0.0, 0.0, 0.0], [-1.0, 1.5, 0.0], [-2.0, 2.0, 0.0]]), np.array([-1, 0, 1]),
+                      ["root", "extra", "extra_end"]).validate()
+    chosen = set()
+    for seed in range(40):
+        turn = Rotation.random(random_state=seed).as_matrix()
+        shift = np.random.default_rng(seed).normal(size=3) * 10.0
+        placed = [Skeleton(s.positions @ turn.T + shift, s.parents, s.names).validate() for s in (source, target)]
+        chosen.add(region_mapping(*placed)[1])
+    assert chosen == {0}  # body's middle (0, 0.5) lies nearer the extra bone than leg's (0.5, 1.5)
