@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -51,5 +53,4 @@ def transform_clip(clip: MotionClip, scale: float, rotation: np.ndarray, transla
     rotations[:, roots] = root_rot.as_quat().reshape(t, len(roots), 4)
     translations[:, roots] = anim.translations[:, roots] * scale @ rotation.T + translation
     new_anim = JointAnimation(list(anim.joint_names), anim.fps, rotations, translations, anim.name, anim.loop)
-    return MotionClip(moved, new_anim, clip.rest_is_standing, clip.source_format, clip.unit_scale * scale, clip.unit,
-                      clip.shares_bind_pose)
+    return replace(clip, skeleton=moved, animation=new_anim, unit_scale=clip.unit_scale * scale)

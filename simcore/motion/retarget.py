@@ -34,10 +34,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
 from simcore.errors import InvalidInput
-from simcore.motion.body_map import fill_by_region, region_mapping
+from simcore.motion.body_map import fill_by_region, flesh_shares, region_mapping
 from simcore.motion.bone_offsets import bone_offsets
 from simcore.motion.chain_match import chain_mapping, normalised_rest, quarter_turn
 from simcore.motion.joint_map import name_mapping, skeleton_slots
@@ -62,7 +63,7 @@ class RetargetResult:
 
     animation: JointAnimation
     mapping: dict[str, str]  # target joint name → source joint name
-    method: str  # "names", "chains" (+ "+overrides")
+    method: str  # "names", "chains", "regions" (+ "+overrides")
     unmapped_target: list[str]
     unmapped_source: list[str]
     root_scale: float  # target / source hip height, applied to root motion
@@ -82,13 +83,14 @@ def _name_turns(source: Skeleton, target: Skeleton, mapping: dict[int, int]) -> 
 
 
 def map_joints(source: Skeleton, target: Skeleton, overrides: dict[str, str] | None = None,
-               same_body: bool = False) -> tuple[dict[int, int], str, int]:
+               same_body: bool = False, shares: np.ndarray | None = None) -> tuple[dict[int, int], str, int]:
     """(target index → source index, method, facing quarter turns).
 
     overrides: source joint name → target joint name; unknown names raise InvalidInput(field="motion.joint_map").
     same_body: both skeletons were built in one mesh in one pose and frame: no quarter turn is looked for;
     without shared names every target joint takes the source joint whose bones lie nearest its own
-    (`region_mapping`, method "regions"), with names the joints they leave unmapped do (`fill_by_region`).
+    (`region_mapping`, method "regions"), with names the joints they leave unmapped do (`fill_by_region`);
+    shares: (Jt, Js) `body_map.flesh_shares` of the two skins on the one mesh, for those mappings.
     """
     by_names = name_mapping(source, target)
     t_slots = skeleton_slots(target)
@@ -100,9 +102,9 @@ def map_joints(source: Skeleton, target: Skeleton, overrides: dict[str, str] | N
         mapping, turns = chain_mapping(source, target, 0 if same_body else None)
         method = "chains"
     if same_body and method == "chains":  # no names to go by: bones in one body pair up by where they lie
-        mapping, method = region_mapping(source, target), "regions"
+        mapping, method = region_mapping(source, target, shares), "regions"
     elif same_body:
-        mapping = fill_by_region(source, target, mapping)
+        mapping = fill_by_region(source, target, mapping, shares)
     mapping = one_pivot_per_source_joint(source, target, mapping, turns, same_body)
     if overrides:
         s_index = {n: j for j, n in enumerate(source.names)}
@@ -263,13 +265,19 @@ def _motion_root(source: Skeleton, anim: JointAnimation, mapping: dict[int, int]
     return int(mapped[np.argmin(depth[mapped])])
 
 
-def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None = None) -> RetargetResult:
-    """Transfer `clip` onto `target` (see the module docstring). Returns the target JointAnimation + report."""
+def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None = None,
+             target_weights: sp.spmatrix | None = None) -> RetargetResult:
+    """Transfer `clip` onto `target` (see the module docstring). Returns the target JointAnimation + report.
+    target_weights: (V, Jt) the target's skin on the mesh whose own skin the clip carries (`bind_weights`)."""
     options = options or MotionOptions()
     source = clip.skeleton
     anim = resample(clip.animation, options.fps, options.start, options.end)
     same_body = clip.shares_bind_pose
-    mapping, method, turns = map_joints(source, target, options.joint_map, same_body=same_body)
+    shares = None
+    if same_body and clip.bind_weights is not None and target_weights is not None \
+            and clip.bind_weights.shape[0] == target_weights.shape[0]:
+        shares = flesh_shares(target_weights, clip.bind_weights)
+    mapping, method, turns = map_joints(source, target, options.joint_map, same_body=same_body, shares=shares)
     if not mapping:
         raise InvalidInput("no joint of the motion could be matched to the character's skeleton",
                            code="no_joint_map", field="motion.joint_map")

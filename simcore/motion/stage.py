@@ -74,7 +74,8 @@ def clip_from_mesh_upload(state: PipelineState) -> MotionClip:
         order = [rig.skeleton.names.index(n) for n in clip.skeleton.names] if set(rig.skeleton.names) == set(clip.skeleton.names) else None
         if order is not None:
             s, r, t = skeleton_similarity(clip.skeleton, rig.skeleton, np.asarray(order))
-            clip = replace(transform_clip(clip, s, r, t), shares_bind_pose=True)  # the mesh's own bind pose, in its frame
+            # the mesh's own bind pose, in its frame, and its skin over the clip's joints
+            clip = replace(transform_clip(clip, s, r, t), shares_bind_pose=True, bind_weights=rig.weights[:, order])
     return clip
 
 
@@ -133,7 +134,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         clip = clip_from_mesh_upload(state)
     progress(0.3)
     progress.check_cancel()
-    result = retarget(clip, state.skeleton, opts)
+    result = retarget(clip, state.skeleton, opts, state.weights)
     state.animation = result.animation
     progress(0.6)
     progress.check_cancel()

@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    import scipy.sparse as sp
+
     from simcore.skeleton.types import Skeleton
 
 
@@ -58,6 +60,9 @@ class MotionClip:
                frame (a clip carried by the mesh upload): the target skeleton was built on the same body in the
                same pose, so where its bones point differently from the source's, they are placed differently,
                not posed differently, and the retarget neither turns them at rest nor rescales root motion.
+    bind_weights: (V, Js) the mesh's own skin weights over this clip's joints, rows in the rigged mesh's vertex
+               order, when the clip is that mesh's own and its skin was read: which source joint moves which
+               flesh (the retarget maps joints that move the same flesh; `body_map.flesh_shares`).
     """
 
     skeleton: Skeleton
@@ -67,3 +72,4 @@ class MotionClip:
     unit_scale: float = 1.0
     unit: str = "file"
     shares_bind_pose: bool = False
+    bind_weights: sp.csr_matrix | None = None

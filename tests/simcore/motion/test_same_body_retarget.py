@@ -7,9 +7,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
-from simcore.motion.body_map import branch_candidates, fill_by_region, region_mapping
+from simcore.motion.body_map import branch_candidates, fill_by_region, flesh_shares, region_mapping
 from simcore.motion.retarget import map_joints, one_pivot_per_source_joint, retarget
 from simcore.motion.types import JointAnimation, MotionClip
 from simcore.skeleton import kinematics
@@ -189,6 +190,24 @@ def test_a_bone_equally_near_two_source_bones_takes_the_one_lying_towards_it():
     for seed in range(40):
         turn = Rotation.random(random_state=seed).as_matrix()
         shift = np.random.default_rng(seed).normal(size=3) * 10.0
-        placed = [Skeleton(s.positions @ turn.T + shift, s.parents, s.names).validate() for s in (source, target)]
-        chosen.add(region_mapping(*placed)[1])
+        moved_source, moved_target = (Skeleton(s.positions @ turn.T + shift, s.parents, s.names).validate()
+                                      for s in (source, target))
+        chosen.add(region_mapping(moved_source, moved_target)[1])
     assert chosen == {0}  # body's middle (0, 0.5) lies nearer the extra bone than leg's (0.5, 1.5)
+
+
+def test_a_bone_out_in_flesh_its_source_joint_moves_follows_that_joint():
+    """A target bone standing out in flesh the artist bound to a body joint whose bone lies farther away than a
+    leg's (a mech's cockpit): given both skins, it follows the body joint; without them, the nearer leg."""
+    source = Skeleton(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]), np.array([-1, 0, 1]),
+                      ["body", "leg", "foot"]).validate()
+    target = Skeleton(np.array([[0.0, 0.0, 0.0], [1.5, 1.0, 0.0], [1.8, 1.0, 0.0]]), np.array([-1, 0, 1]),
+                      ["root", "cockpit", "cockpit_end"]).validate()
+    ours = sp.csr_matrix(np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    artist = sp.csr_matrix(np.array([[1.0, 0.0, 0.0], [0.9, 0.1, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    assert region_mapping(source, target)[1] == 1
+    assert region_mapping(source, target, flesh_shares(ours, artist))[1] == 0
+    anim = _still(source)
+    clip = MotionClip(source, anim, rest_is_standing=True, source_format="test", shares_bind_pose=True, bind_weights=artist)
+    assert retarget(clip, target, target_weights=ours).mapping["cockpit"] == "body"
+    assert retarget(clip, target).mapping["cockpit"] == "leg"

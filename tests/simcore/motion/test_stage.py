@@ -121,7 +121,10 @@ def test_clip_of_the_mesh_upload_on_an_auto_skeleton_shares_its_bind_pose(tmp_pa
     clip = stage.clip_from_mesh_upload(state)
     assert clip.shares_bind_pose
     rig = mesh.source_rig.skeleton
-    assert np.allclose(clip.skeleton.positions, rig.positions[[rig.names.index(n) for n in clip.skeleton.names]], atol=1e-4)
+    order = [rig.names.index(n) for n in clip.skeleton.names]
+    assert np.allclose(clip.skeleton.positions, rig.positions[order], atol=1e-4)
+    assert clip.bind_weights is not None  # the upload's skin, its columns in the clip's joint order
+    assert np.array_equal(clip.bind_weights.toarray(), mesh.source_rig.weights.toarray()[:, order])
     low_hips = mesh.source_rig.skeleton  # a rig of the same body with the hips 10 % lower sets the root scale otherwise
     target = replace(low_hips, positions=low_hips.positions * [1.0, 0.9, 1.0])
     assert retarget(clip, target).root_scale == 1.0
