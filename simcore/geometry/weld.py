@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+KEY_BITS = 21  # cell index bits per axis packed into one int64 key; the default tolerance needs 20
 
 @dataclass
 class WeldedMesh:
@@ -40,6 +41,8 @@ def weld_vertices(vertices: np.ndarray, faces: np.ndarray, tolerance: float | No
     if tolerance is None:
         tolerance = 1e-6 * max(float(np.linalg.norm(v.max(axis=0) - v.min(axis=0))), 1e-12)
     keys = np.round((v - v.min(axis=0)) / tolerance).astype(np.int64)
+    if keys.max() < 1 << KEY_BITS:  # one int64 per cell: a 1-D unique is several times faster than rows'
+        keys = (keys[:, 0] << 2 * KEY_BITS) | (keys[:, 1] << KEY_BITS) | keys[:, 2]
     _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     inverse = inverse.reshape(-1)
     # Keep the welded vertices in the order of their first occurrence (stable, easier to debug).
