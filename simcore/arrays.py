@@ -18,3 +18,19 @@ def unique_ints(values: np.ndarray) -> np.ndarray:
     keep[0] = True
     np.not_equal(flat[1:], flat[:-1], out=keep[1:])
     return flat[keep]
+
+
+
+def smallest_k(values: np.ndarray, k: int) -> np.ndarray:
+    """(N, k) column indices of each row's k smallest values of `values` (N, M), in the order of a stable argsort
+    (equal values by column): `np.argsort(values, axis=1, kind="stable")[:, :k]` without sorting whole rows."""
+    v = np.asarray(values)
+    if k >= v.shape[1]:
+        return np.argsort(v, axis=1, kind="stable")
+    part = np.sort(np.argpartition(v, k - 1, axis=1)[:, :k], axis=1)  # by column, so a stable sort ties by column
+    chosen = np.take_along_axis(v, part, axis=1)
+    out = np.take_along_axis(part, np.argsort(chosen, axis=1, kind="stable"), axis=1)
+    # Where a value left out equals the k-th, the partition may have kept another copy than the lowest columns.
+    tied = np.flatnonzero((v <= chosen.max(axis=1, keepdims=True)).sum(axis=1) > k)
+    out[tied] = np.argsort(v[tied], axis=1, kind="stable")[:, :k]
+    return out

@@ -20,7 +20,7 @@ from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.skinning.pair_features import skin_inputs
 
 WEIGHTS = Path(__file__).parent / "weights" / "skin_attention.safetensors"
-CHUNK = 512  # vertices per forward pass: the (chunk, K, width) activations stay in the CPU cache
+CHUNK = 1024  # vertices per forward pass: the (chunk, K, width) activations stay in the CPU cache
 PROGRESS_EVERY = 16  # chunks between progress reports
 ARMATURE_ROOT = "__armature_root__"
 

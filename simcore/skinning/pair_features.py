@@ -27,6 +27,7 @@ import scipy.sparse as sp
 import trimesh
 from scipy.sparse.csgraph import connected_components
 
+from simcore.arrays import smallest_k
 from simcore.geometry.laplacian import adjacency
 from simcore.geometry.weld import weld_vertices
 from simcore.metrics.skinning import unit_cube_frame
@@ -144,7 +145,7 @@ def skin_inputs(
     dist, t = closest_on_segments(v / side, segments.heads / side, segments.tails / side)  # (V, S)
     j = skeleton.num_joints
     k = min(candidates, j)
-    cand = np.argsort(geo, axis=1, kind="stable")[:, :k]
+    cand = smallest_k(geo, k)
     g = np.take_along_axis(geo, cand, axis=1)
     e, a = _nearest_segment(dist, t, segments.owner, j, cand)
     e = np.where(np.isfinite(e), e, FAR)  # a helper joint owns no segment (bones.py): as far as an unreachable one

@@ -26,9 +26,9 @@ def smooth_on_surface(weights: np.ndarray, adjacency: sp.csr_matrix, iterations:
     (a coarse mesh's long edges would move weight across whole bones). Row sums are preserved (each pass is a
     convex combination of normalised rows).
     """
-    w = np.asarray(weights, dtype=np.float64)
+    w = np.array(weights, dtype=np.float64)  # a copy: the passes below update it in place
     if iterations <= 0 or adjacency.nnz == 0:
-        return w.copy()
+        return w
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
     links = adjacency.tocoo()
     if vertices is not None and reach > 0:
@@ -38,7 +38,9 @@ def smooth_on_surface(weights: np.ndarray, adjacency: sp.csr_matrix, iterations:
     mean_op = (sp.diags(strength / np.maximum(degree, 1)) @ links).tocsr()  # strength × the mean (isolated rows: 0)
     keep = 1.0 - np.asarray(mean_op.sum(axis=1))  # what stays of each vertex's own weights
     for _ in range(iterations):
-        w = keep * w + mean_op @ w
+        moved = mean_op @ w
+        w *= keep
+        w += moved
     return w
 
 

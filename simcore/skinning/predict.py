@@ -133,7 +133,6 @@ def compute_weights(
     first = np.unique(welded.index, return_index=True)[1]  # one original vertex per welded vertex
     reach = SMOOTH_REACH * float(np.ptp(welded.vertices, axis=0).max())
     helpers = np.array([kind == JointKind.HELPER for kind in skeleton.kinds])
-    mirror = weight_mirror(welded.vertices, skeleton)  # None: the character is not symmetric
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
@@ -146,6 +145,7 @@ def compute_weights(
         on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
         on_welded[welded.index] = dense
         smoothed = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH, welded.vertices, reach)
+        mirror = mirrored.result()
         dense = (smoothed if mirror is None else mirror.apply(smoothed))[welded.index]
         weights = top_k(dense, max_influences)
         seconds = time.perf_counter() - started
@@ -160,8 +160,10 @@ def compute_weights(
     scores: dict[str, dict[str, float]] = {}
     tracker = _MethodProgress(chosen)
     # The methods are independent and spend most of their time in numpy/scipy calls that release the GIL, so they
-    # run side by side; the cost is that every method's (V, J) array lives at once.
-    with ThreadPoolExecutor(max_workers=max(1, min(len(chosen), usable_cores()))) as pool:
+    # run side by side; the cost is that every method's (V, J) array lives at once. The mirror search runs beside
+    # them too (a method's serial stretches leave a core free).
+    with ThreadPoolExecutor(max_workers=max(1, min(len(chosen), usable_cores())) + 1) as pool:
+        mirrored = pool.submit(weight_mirror, welded.vertices, skeleton)  # None: the character is not symmetric
         futures = {pool.submit(run, name, tracker.updater(name)): name for name in chosen}
         pending = set(futures)
         try:
@@ -178,6 +180,7 @@ def compute_weights(
     # separate pieces mostly on one joint, or holding none, follow one; the parts come from the weld above unless that was the proxy's
     labels = part_labels(mesh.vertices, mesh.faces) if on_proxy else welded_part_labels(welded, adj)
     weights = bind_rigid_parts(mesh.vertices, labels, weights, skeleton.positions[~helpers])  # helpers hold no part
+    mirror = mirrored.result()
     return SkinningResult(_all_vertices(weights, mesh, np.asarray(vertices, dtype=np.float64)), best, scores, reason,
                           None if mirror is None else mirror.report())
 
