@@ -20,12 +20,13 @@ the vertices and its bounding-box diagonal.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
 import trimesh
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial.transform import Rotation
 
 from simcore.arrays import smallest_k
 from simcore.geometry.laplacian import adjacency
@@ -39,6 +40,7 @@ CANDIDATES = 16  # joints per vertex: artists blend a vertex between a few nearb
 PAIR_FEATURES = 18
 BONE_FEATURES = 11
 POINT_FEATURES = 10
+VECTOR_COLUMNS = (0, 3)  # first columns of the 3-vectors of the point (position, normal) and bone (head, tail) features
 FAR = 4.0  # unit-cube distance standing in for a joint the solid does not connect to the vertex
 EPS = DISTANCE_UNIT  # softens ratios of distances near a bone
 
@@ -53,6 +55,17 @@ class SkinInputs:
     bone: np.ndarray
     point: np.ndarray
     prior: np.ndarray
+
+
+def turned(inputs: SkinInputs, angle: float) -> SkinInputs:
+    """`inputs` of the character turned by `angle` radians about the up axis (+Y) through its centre: only the point
+    and bone vectors move; distances, relations and the prior do not depend on the turn."""
+    rotation = Rotation.from_rotvec([0.0, angle, 0.0]).as_matrix().astype(np.float32)
+    point, bone = inputs.point.copy(), inputs.bone.copy()
+    for c in VECTOR_COLUMNS:
+        point[:, c:c + 3] = point[:, c:c + 3] @ rotation.T
+        bone[:, c:c + 3] = bone[:, c:c + 3] @ rotation.T
+    return replace(inputs, point=point, bone=bone)
 
 
 def bone_features(skeleton: Skeleton, centre: np.ndarray, side: float) -> np.ndarray:

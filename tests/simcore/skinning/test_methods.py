@@ -211,3 +211,27 @@ def test_a_deforming_root_keeps_its_share_under_the_learned_model(bent_tube) -> 
     np.testing.assert_allclose(body.sum(axis=1), 1.0, atol=1e-5)
     _dominant_joint_near_bones(v, skeleton, body)
     assert body[:, 0].sum() > 1.05 * plain[:, 0].sum()  # the root bends the lower tube: it gains weight
+
+
+def test_the_learned_model_averages_the_character_and_its_half_turn(bent_tube, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two readings, the character as it is and turned half a turn about the up axis, averaged; one reading where
+    the pairs would cost too much time."""
+    from simcore.skinning import learned
+    from simcore.skinning.pair_features import skin_inputs, turned
+
+    v, f, skeleton = bent_tube
+    inputs = skin_inputs(v, f, skeleton)
+    back = turned(inputs, np.pi)
+    np.testing.assert_allclose(back.point[:, :3], inputs.point[:, :3] * [-1, 1, -1], atol=1e-6)
+    np.testing.assert_allclose(back.bone[:, 3:6], inputs.bone[:, 3:6] * [-1, 1, -1], atol=1e-6)
+    np.testing.assert_array_equal(back.pair, inputs.pair)
+    both = learned.learned_weights(v, f, skeleton)
+    monkeypatch.setattr(learned, "TURNS", (0.0,))
+    front = learned.learned_weights(v, f, skeleton)
+    monkeypatch.setattr(learned, "TURNS", (np.pi,))
+    behind = learned.learned_weights(v, f, skeleton)
+    assert np.abs(front - behind).max() > 1e-3  # the turn changes what the model reads
+    np.testing.assert_allclose(both, 0.5 * (front + behind), atol=1e-9)
+    monkeypatch.setattr(learned, "TURNS", (0.0, np.pi))
+    monkeypatch.setattr(learned, "TURN_PAIRS", inputs.candidates.size - 1)
+    np.testing.assert_allclose(learned.learned_weights(v, f, skeleton), front, atol=1e-12)
