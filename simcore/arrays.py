@@ -20,7 +20,6 @@ def unique_ints(values: np.ndarray) -> np.ndarray:
     return flat[keep]
 
 
-
 def smallest_k(values: np.ndarray, k: int) -> np.ndarray:
     """(N, k) column indices of each row's k smallest values of `values` (N, M), in the order of a stable argsort
     (equal values by column): `np.argsort(values, axis=1, kind="stable")[:, :k]` without sorting whole rows."""

@@ -13,6 +13,7 @@ import numpy as np
 
 KEY_BITS = 21  # cell index bits per axis packed into one int64 key; the default tolerance needs 20
 
+
 @dataclass
 class WeldedMesh:
     """A mesh with coincident vertices merged.

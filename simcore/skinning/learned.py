@@ -1,9 +1,9 @@
 """The `learned` skinning method: the trained bone–point attention model (weights shipped in the repo).
 
 The model is read once per process (a worker loads it on its first job, never per job). It reads each character
-twice, as it is and turned half a turn about the up axis, and averages the two (TURNS; one pass on big meshes). Its file is a
-safetensors state dict whose metadata carries the network sizes and training summary; a missing or corrupt
-file raises ModelUnavailable with the path and the reason.
+twice, as it is and turned half a turn about the up axis, and averages the two (TURNS; one pass on big meshes).
+Its file is a safetensors state dict whose metadata carries the network sizes and training summary; a missing or
+corrupt file raises ModelUnavailable with the path and the reason.
 """
 
 from __future__ import annotations
