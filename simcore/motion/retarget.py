@@ -274,8 +274,7 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     anim = resample(clip.animation, options.fps, options.start, options.end)
     same_body = clip.shares_bind_pose
     shares = None
-    if same_body and clip.bind_weights is not None and target_weights is not None \
-            and clip.bind_weights.shape[0] == target_weights.shape[0]:
+    if same_body and clip.bind_weights is not None and target_weights is not None:
         shares = flesh_shares(target_weights, clip.bind_weights)
     mapping, method, turns = map_joints(source, target, options.joint_map, same_body=same_body, shares=shares)
     if not mapping:

@@ -73,19 +73,20 @@ def learned_weights(
     model = load_model(model_path)
     inputs = skin_inputs(vertices, faces, skeleton, progress=lambda f: progress(0.7 * f))
     turns = TURNS if inputs.candidates.size <= TURN_PAIRS else TURNS[:1]
-    out = np.zeros((len(inputs.candidates), skeleton.num_joints))
+    count = len(inputs.candidates)
+    mean = np.zeros(inputs.candidates.shape)  # (V, K) over the candidates, which no turn changes
     for k, angle in enumerate(turns):
         seen = turned(inputs, angle) if angle else inputs
         with torch.no_grad():
             bones = model.bones(torch.from_numpy(seen.bone))
-            for start in range(0, len(out), CHUNK):
+            for start in range(0, count, CHUNK):
                 rows = slice(start, start + CHUNK)
                 logits = model.logits(torch.from_numpy(seen.pair[rows]), bones, torch.from_numpy(seen.point[rows]),
                                       torch.from_numpy(seen.candidates[rows]), torch.from_numpy(seen.prior[rows]))
-                probabilities = torch.softmax(logits, dim=-1).double().numpy() / len(turns)
-                np.put_along_axis(out[rows], seen.candidates[rows],
-                                  np.take_along_axis(out[rows], seen.candidates[rows], axis=1) + probabilities, axis=1)
+                mean[rows] += torch.softmax(logits, dim=-1).double().numpy() / len(turns)
                 if (start // CHUNK) % PROGRESS_EVERY == 0:
-                    progress(0.7 + 0.3 * min(1.0, (k * len(out) + start + CHUNK) / (len(turns) * len(out))))
+                    progress(0.7 + 0.3 * min(1.0, (k * count + start + CHUNK) / (len(turns) * count)))
+    out = np.zeros((count, skeleton.num_joints))
+    np.put_along_axis(out, inputs.candidates, mean, axis=1)
     progress(1.0)
     return out

@@ -45,7 +45,7 @@ class WeightMirror:
         rows weight twinned joints only."""
         out = np.array(weights, dtype=np.float64, copy=True)
         unpaired = self.joint_twin < 0
-        on_twinned = ~np.any(weights[:, unpaired] > 0.0, axis=1) if unpaired.any() else np.ones(len(weights), bool)
+        on_twinned = ~np.any(weights[:, unpaired] > 0.0, axis=1)  # every row when no joint is unpaired
         rows = np.flatnonzero((self.vertex_twin >= 0) & on_twinned)
         rows = rows[on_twinned[self.vertex_twin[rows]]]
         # twins swap in pairs, so column j of the mirrored row is the twin vertex's column twin[j] (an unpaired
