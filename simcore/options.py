@@ -78,7 +78,9 @@ class JobOptions(_Strict):
     units: Literal["auto", "m", "cm", "mm", "in"] = "auto"
     skinning: Literal["auto", "learned", "geodesic", "heat"] = "auto"
     max_influences: Literal[4, 8] = 4
-    smooth_iterations: int = Field(SMOOTH_ITERATIONS, ge=0, le=50)
+    smooth_iterations: int = Field(SMOOTH_ITERATIONS, ge=0, le=50,
+                                   description="passes of surface smoothing of the weights, which then no edge may "
+                                               "carry more steeply than a bend allows; 0 keeps the method's weights")
     exclude_joints: list[Annotated[str, Field(min_length=1, max_length=200)]] = Field(
         default_factory=list, max_length=256,
         description="glob patterns (case-insensitive) of joints that get no skinning weight, e.g. a kept rig's "

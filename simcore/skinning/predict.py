@@ -29,6 +29,7 @@ from simcore.skinning.parts import bind_rigid_parts
 from simcore.skinning.postprocess import SMOOTH_ITERATIONS, normalize_rows, smooth_on_surface, top_k
 from simcore.skinning.proxy import PROXY_VERTICES, simplified, transfer
 from simcore.skinning.quality import quality_scores
+from simcore.skinning.steepness import limit_steepness
 
 Method = Literal["auto", "learned", "geodesic", "heat"]
 METHODS: dict[str, Callable[..., np.ndarray]] = {  # (vertices, faces, skeleton, *, progress) -> (V, J) weights
@@ -145,6 +146,8 @@ def compute_weights(
         on_welded = np.zeros((len(welded.vertices), dense.shape[1]))
         on_welded[welded.index] = dense
         smoothed = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH, welded.vertices, reach)
+        if smooth_iterations > 0:  # no edge steeper than a bend can carry (steepness.py); 0 passes: the raw weights
+            smoothed = limit_steepness(smoothed, adj, welded.vertices, skeleton)
         mirror = mirrored.result()
         dense = (smoothed if mirror is None else mirror.apply(smoothed))[welded.index]
         weights = top_k(dense, max_influences)

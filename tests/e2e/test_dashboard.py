@@ -372,7 +372,7 @@ def test_camera_follows_a_clip_that_walks_away_and_stays_put_when_told(page, das
     bvh = bvh_text(skel, roots, np.zeros((frames, skel.num_joints, 3)), ["ZXY"] * skel.num_joints).encode()
     r = httpx.post(f"{dashboard_server.url}/api/v1/jobs", headers={"Authorization": f"Bearer {dashboard_server.local_key}"},
                    files={"mesh": ("rigged_figure.glb", (dev_assets / "rigged_figure.glb").read_bytes()), "motion": ("walk.bvh", bvh)},
-                   # warn: the toy's shoulders compress past the gate in the clip's T-pose; this test is about the camera
+                   # warn: the toy's shoulders come near the gate's floor in the clip's T-pose; this test is about the camera
                    data={"options": json.dumps({"skeleton": "keep", "quality_gate": "warn"})}, timeout=60)
     assert r.status_code == 202, r.text
     sign_in(page, dashboard_server.local_key)
