@@ -30,7 +30,7 @@ PASSES = 30
 # character) the limit is partial: the first passes take the steepest edges down, the budget stops the rest.
 WORK_PER_EDGE = 8
 MAX_WORK = 300_000
-CHUNK = 16_384  # edges measured at once: the (edges, J) differences stay within a few MB
+CHUNK_ENTRIES = 1_000_000  # edges × joints measured at once: the differences stay within 8 MB
 
 
 class EdgeSteepness:
@@ -46,13 +46,14 @@ class EdgeSteepness:
     def of(self, weights: np.ndarray, edges: np.ndarray) -> np.ndarray:
         """(n,) steepness of the n listed edges (indices into a, b) under (V, J) `weights`."""
         out = np.empty(len(edges))
-        for start in range(0, len(edges), CHUNK):
-            part = edges[start:start + CHUNK]
+        chunk = max(1, CHUNK_ENTRIES // weights.shape[1])
+        for start in range(0, len(edges), chunk):
+            part = edges[start:start + chunk]
             diff = weights[self.b[part]] - weights[self.a[part]]
             gain, loss = diff.argmax(axis=1), diff.argmin(axis=1)
             pivot = np.where(self.depth[gain] >= self.depth[loss], gain, loss)
             r = np.linalg.norm(self.middle[part] - self.joints[pivot], axis=1)
-            out[start:start + CHUNK] = 0.5 * np.abs(diff).sum(axis=1) * r / self.length[part]
+            out[start:start + chunk] = 0.5 * np.abs(diff).sum(axis=1) * r / self.length[part]
         return out
 
 
@@ -82,13 +83,17 @@ def limit_steepness(weights: np.ndarray, adjacency: sp.spmatrix, vertices: np.nd
         if not over.any():
             break
         bad = look[over]
-        step = (0.5 * (1.0 - cap / measured[over]))[:, None] * (w[b[bad]] - w[a[bad]])
+        share = 0.5 * (1.0 - cap / measured[over])  # of the gap, each end's move: the edge alone would end at the cap
         rows, slot = np.unique(np.r_[a[bad], b[bad]], return_inverse=True)
-        # each end takes the mean of the moves its steep edges ask for (a sparse sum: faster than np.add.at)
-        pairs = np.arange(len(bad))
+        # each end takes the mean of the moves its steep edges ask for, summed chunk by chunk as a sparse product
         ends = sp.csr_matrix((np.r_[np.ones(len(bad)), -np.ones(len(bad))],
-                              (slot, np.r_[pairs, pairs])), shape=(len(rows), len(bad)))
-        w[rows] += (ends @ step) / np.bincount(slot)[:, None]
+                              (slot, np.r_[np.arange(len(bad)), np.arange(len(bad))])), shape=(len(rows), len(bad)))
+        delta = np.zeros((len(rows), w.shape[1]))
+        chunk = max(1, CHUNK_ENTRIES // w.shape[1])
+        for start in range(0, len(bad), chunk):
+            part = slice(start, start + chunk)
+            delta += ends[:, part] @ (share[part, None] * (w[b[bad[part]]] - w[a[bad[part]]]))
+        w[rows] += delta / np.bincount(slot)[:, None]
         moved = np.zeros(len(w), dtype=bool)
         moved[rows] = True
         look = np.flatnonzero(moved[a] | moved[b])
