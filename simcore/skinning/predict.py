@@ -147,7 +147,7 @@ def compute_weights(
         on_welded[welded.index] = dense
         smoothed = smooth_on_surface(on_welded, adj, smooth_iterations, SMOOTH_STRENGTH, welded.vertices, reach)
         if smooth_iterations > 0:  # no edge steeper than a bend can carry (steepness.py); 0 passes: the raw weights
-            smoothed = limit_steepness(smoothed, adj, welded.vertices, skeleton)
+            smoothed = limit_steepness(smoothed, welded.faces, welded.vertices, skeleton)
         mirror = mirrored.result()
         dense = (smoothed if mirror is None else mirror.apply(smoothed))[welded.index]
         weights = top_k(dense, max_influences)

@@ -12,7 +12,7 @@ weight along it (a child turning against its parent turns about its own head).
 Each pass moves both ends of every edge steeper than the cap towards each other, so that the edge alone would end
 at the cap; an end on several such edges takes the mean of its moves (a convex combination: rows keep their sums
 and stay non-negative). Only edges next to a vertex that moved are measured again, so the cost follows the blends,
-not the mesh. The cap is chosen on corpus val (the README's skinning rows carry the sweep).
+not the mesh. The cap is chosen on corpus val (the README's Skinning section carries the sweep).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from simcore.geometry.laplacian import edges
 from simcore.skeleton.types import Skeleton, tree_depths
 
 STEEPNESS_CAP = 0.5  # Δ · r / length: a 90° bend then changes a lone edge's length by at most about 0.7 of it
@@ -57,20 +58,20 @@ class EdgeSteepness:
         return out
 
 
-def mesh_edges(adjacency: sp.spmatrix, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(a, b) int64 the ends of each edge of the (V, V) `adjacency` once, edges of zero length left out."""
-    upper = sp.triu(adjacency, k=1).tocoo()
-    a, b = upper.row.astype(np.int64), upper.col.astype(np.int64)
+def mesh_edges(faces: np.ndarray, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b) int64 the ends of each edge of the triangles (F, 3) once (`laplacian.edges`), zero-length edges left
+    out."""
+    a, b = edges(faces).T
     keep = np.any(vertices[a] != vertices[b], axis=1)
     return a[keep], b[keep]
 
 
-def limit_steepness(weights: np.ndarray, adjacency: sp.spmatrix, vertices: np.ndarray, skeleton: Skeleton,
+def limit_steepness(weights: np.ndarray, faces: np.ndarray, vertices: np.ndarray, skeleton: Skeleton,
                     cap: float = STEEPNESS_CAP, passes: int = PASSES) -> np.ndarray:
-    """(V, J) float64 copy of `weights` in which the edges of `adjacency` (V, V) steeper than `cap` are relaxed
-    towards it, `passes` times at most. vertices: (V, 3) in the skeleton's space."""
+    """(V, J) float64 copy of `weights` in which the edges of the triangles `faces` (F, 3) steeper than `cap` are
+    relaxed towards it, `passes` times at most. vertices: (V, 3) in the skeleton's space."""
     w = np.array(weights, dtype=np.float64)
-    a, b = mesh_edges(adjacency, vertices)
+    a, b = mesh_edges(faces, vertices)
     steepness = EdgeSteepness(vertices, a, b, skeleton)
     look = np.arange(len(a))  # the edges to measure this pass
     budget = min(WORK_PER_EDGE * len(a), MAX_WORK)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from simcore.geometry.laplacian import adjacency
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.predict import compute_weights
 from simcore.skinning.steepness import STEEPNESS_CAP, EdgeSteepness, limit_steepness, mesh_edges
@@ -35,7 +34,7 @@ def _step(vertices: np.ndarray) -> np.ndarray:
 
 
 def _steepest(vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, weights: np.ndarray) -> float:
-    a, b = mesh_edges(adjacency(faces, len(vertices)), vertices)
+    a, b = mesh_edges(faces, vertices)
     return float(EdgeSteepness(vertices, a, b, skeleton).of(weights, np.arange(len(a))).max())
 
 
@@ -43,7 +42,7 @@ def test_a_blend_in_one_ring_is_spread_to_the_cap_with_rows_kept() -> None:
     vertices, faces, skeleton = _tube()
     weights = _step(vertices)
     assert _steepest(vertices, faces, skeleton, weights) > 3.0  # Δ 1 over 0.05, 0.2 from the joint
-    limited = limit_steepness(weights, adjacency(faces, len(vertices)), vertices, skeleton)
+    limited = limit_steepness(weights, faces, vertices, skeleton)
     assert _steepest(vertices, faces, skeleton, limited) <= STEEPNESS_CAP * 1.2  # relaxed towards the cap in 30 passes
     np.testing.assert_allclose(limited.sum(axis=1), 1.0, atol=1e-12)
     assert limited.min() >= 0.0
@@ -59,7 +58,7 @@ def test_weights_gentle_enough_are_left_as_they_are() -> None:
     ramp = np.clip(vertices[:, 1] / 2.0, 0.0, 1.0)  # the blend spread over the whole tube
     weights = np.column_stack([1.0 - ramp, ramp, np.zeros(len(vertices))])
     assert _steepest(vertices, faces, skeleton, weights) < STEEPNESS_CAP
-    limited = limit_steepness(weights, adjacency(faces, len(vertices)), vertices, skeleton)
+    limited = limit_steepness(weights, faces, vertices, skeleton)
     np.testing.assert_array_equal(limited, weights)
 
 
