@@ -27,6 +27,9 @@ class MotionOptions(_Strict):
     end: float | None = Field(None, gt=0, description="clip end time, seconds")
     loop: bool = False
     unit_scale: float | None = Field(None, gt=0, description="override the guessed BVH unit → metres scale")
+    relax_weights: bool = Field(True, description="move the skin weights around edges the clip crushes or stretches "
+                                "past 2 % of their length, as little as the clip needs (report.json motion.relaxation); "
+                                "false keeps the skin stage's weights")
 
 
 class RefineOptions(_Strict):

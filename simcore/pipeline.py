@@ -60,6 +60,12 @@ class PipelineState:
     refined_frames: np.ndarray | None = None  # (T, V, 3) float32 simulated vertex positions
     stage: str = "ingest"  # the stage running now: where warnings come from
 
+    def body_faces(self) -> np.ndarray:
+        """The mesh's faces but a ground plane's (it is bound rigidly to the root)."""
+        assert self.mesh is not None, "ingest runs first"
+        faces = self.mesh.faces
+        return faces if self.ground_faces is None else faces[~self.ground_faces]
+
     def warn(self, message: str, *, code: str = "notice", figure: float | None = None,
              threshold: float | None = None) -> None:
         """Record a user-facing warning of the current stage (report.json and the job's `warnings`)."""

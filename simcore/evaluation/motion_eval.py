@@ -266,8 +266,10 @@ def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: 
     assert state.mesh is not None and state.skeleton is not None and state.weights is not None, "the stages ran"
     vertices = clips[0][0]
     frame = _bind_frame(state, vertices)
+    skin_weights = state.weights  # each clip is its own job: its motion stage starts from the skin stage's weights
     rows = []
     for k, (_, clip) in enumerate(clips):
+        state.weights = skin_weights
         row = MotionRow(name, category, "ours", clip.animation.name, clip.animation.num_frames, state.skeleton.num_joints,
                         **{f: getattr(artist_rows[k], f) for f in ARTIST_FIELDS})
         try:
@@ -283,7 +285,7 @@ def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: 
                 reference = linear_blend(vertices, artist_w, skin_matrices(clip.skeleton, clip.animation)[keep])
                 _vertex_error(s * ours @ r.T + t, reference, float(np.ptp(vertices, axis=0).max()), row)
             if category == "humanoid" and k == 0:
-                row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, state.mesh.vertices, state.skeleton, state.weights)
+                row.mocap_sliding, row.mocap_contact = _mocap_sliding(mocap, state.mesh.vertices, state.skeleton, skin_weights)
         except SimcoreError as exc:
             row.error = f"{exc.code}: {exc}"
         row.seconds = round(time.perf_counter() - started, 2)

@@ -78,17 +78,10 @@ def _deformation(judge: _Judge, series: DeformationSeries, prefix: str) -> dict[
     return out
 
 
-def _body_faces(state: PipelineState) -> np.ndarray:
-    """The mesh's faces but a ground plane's (it is bound rigidly to the root)."""
-    assert state.mesh is not None, "ingest runs before the checks"
-    faces = state.mesh.faces
-    return faces if state.ground_faces is None else faces[~state.ground_faces]
-
-
 def check_skeleton(state: PipelineState, judge: _Judge) -> dict[str, Any] | None:
     if state.skeleton is None or state.mesh is None:
         return None
-    fig = skeleton_figures(state.skeleton, state.mesh.vertices, _body_faces(state))
+    fig = skeleton_figures(state.skeleton, state.mesh.vertices, state.body_faces())
     judge("joints_inside", fig["joints_inside"], "joints_outside",
           lambda v: f"only {100 * v:.1f} % of the joints lie inside the mesh")
     judge("zero_length_bone_share", fig["zero_length_bone_share"], "zero_length_bones",
@@ -118,7 +111,7 @@ def _lbs_blocks(state: PipelineState):  # noqa: ANN202 - an iterator of (t, V, 3
 def check_animation(state: PipelineState, judge: _Judge) -> dict[str, Any] | None:
     if state.animation is None or state.weights is None or state.mesh is None:
         return None
-    return _deformation(judge, deformation_series(state.mesh.vertices, _body_faces(state), _lbs_blocks(state)), "")
+    return _deformation(judge, deformation_series(state.mesh.vertices, state.body_faces(), _lbs_blocks(state)), "")
 
 
 def _tear(state: PipelineState) -> tuple[float, int]:
@@ -147,7 +140,7 @@ def check_refinement(state: PipelineState, judge: _Judge) -> dict[str, Any] | No
     tear, tear_frame = _tear(state)
     frames = state.refined_frames
     step = max(1, BLOCK_VALUES // frames.shape[1])
-    series = deformation_series(state.mesh.vertices, _body_faces(state), (frames[i:i + step] for i in range(0, len(frames), step)))
+    series = deformation_series(state.mesh.vertices, state.body_faces(), (frames[i:i + step] for i in range(0, len(frames), step)))
     fig = {"non_finite_vertices": non_finite, "tear_radii": round(tear, 4), "tear_frame": tear_frame,
            "det_f_clamped_share": round(int(clamped.get("det_f", 0)) / samples, 8)}
     judge("refine_non_finite_vertices", non_finite, "refine_non_finite",

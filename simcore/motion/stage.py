@@ -111,6 +111,19 @@ def motion_report(state: PipelineState, clip: MotionClip, result: Any) -> dict[s
     return out
 
 
+def _relax(state: PipelineState) -> dict[str, Any] | None:
+    """Relax state.weights under state.animation (relax_weights.py); its figures, or None without weights."""
+    from simcore.motion.quality import skin_matrices
+    from simcore.motion.relax_weights import relax_weights
+
+    if state.weights is None or state.mesh is None or state.skeleton is None or state.animation is None:
+        return None
+    mats = skin_matrices(state.skeleton, state.animation)
+    relaxed = relax_weights(state.mesh.vertices, state.body_faces(), state.weights, mats, state.options.max_influences)
+    state.weights = relaxed.weights
+    return relaxed.figures()
+
+
 def run(state: PipelineState, progress: StageProgress) -> None:
     """Retarget the job's motion onto state.skeleton; set state.animation and report["motion"]."""
     from simcore.motion.retarget import retarget
@@ -136,9 +149,13 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     progress.check_cancel()
     result = retarget(clip, state.skeleton, opts, state.weights)
     state.animation = result.animation
-    progress(0.6)
+    progress(0.5)
+    progress.check_cancel()
+    relaxation = _relax(state) if opts.relax_weights else None
+    progress(0.8)
     progress.check_cancel()
     state.report["motion"] = motion_report(state, clip, result)
+    state.report["motion"]["relaxation"] = relaxation
     unmapped = len(result.unmapped_target)
     if unmapped > 0.5 * state.skeleton.num_joints:
         state.warn(f"motion: {unmapped} of {state.skeleton.num_joints} joints had no match in the clip and follow their parents")

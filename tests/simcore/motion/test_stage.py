@@ -148,3 +148,17 @@ def test_a_two_bone_uploads_clip_keeps_the_turn_of_its_joint_frames(tmp_path, de
     order = [rig.names.index(n) for n in clip.skeleton.names]
     apart = Rotation.from_quat(clip.skeleton.orientations) * Rotation.from_quat(rig.orientations[order]).inv()
     assert np.degrees(apart.magnitude()).max() < 0.1
+
+
+def test_the_clip_relaxes_the_weights_unless_asked_not_to(tmp_path):
+    kept = _state(tmp_path, _walk_bvh(tmp_path), "bvh", fps=10, relax_weights=False)
+    skin = kept.weights
+    assert skin is not None
+    stage.run(kept, _progress([]))
+    assert kept.weights is skin and kept.report["motion"]["relaxation"] is None
+    relaxed = _state(tmp_path, _walk_bvh(tmp_path), "bvh", fps=10)
+    stage.run(relaxed, _progress([]))
+    figures = relaxed.report["motion"]["relaxation"]
+    assert set(figures) == {"vertices_moved", "edges_over_before", "edges_over_after", "mean_row_change", "tolerance"}
+    assert relaxed.weights is not None and relaxed.weights.shape == skin.shape
+    np.testing.assert_allclose(np.asarray(relaxed.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)

@@ -7,22 +7,8 @@ import numpy as np
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.predict import compute_weights
 from simcore.skinning.steepness import STEEPNESS_CAP, EdgeSteepness, limit_steepness, mesh_edges
-
-RADIUS = 0.2
-
-
-def _tube(rings: int = 41, sides: int = 12) -> tuple[np.ndarray, np.ndarray, Skeleton]:
-    """A tube along +y from 0 to 2, `rings` rings apart evenly, bones 0 → 1 → 2 along its axis."""
-    angle = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
-    y = np.linspace(0.0, 2.0, rings)
-    vertices = np.array([(RADIUS * np.cos(t), h, RADIUS * np.sin(t)) for h in y for t in angle])
-    faces = []
-    for i in range(rings - 1):
-        for k in range(sides):
-            p, q = i * sides + k, i * sides + (k + 1) % sides
-            faces += [[p, q, p + sides], [q, q + sides, p + sides]]
-    skeleton = Skeleton(np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.0]]), np.array([-1, 0, 1]), ["a", "b", "c"])
-    return vertices, np.array(faces), skeleton
+from tests.simcore.tube_mesh import RADIUS
+from tests.simcore.tube_mesh import tube as _tube
 
 
 def _step(vertices: np.ndarray) -> np.ndarray:

@@ -1,0 +1,187 @@
+"""Skin weights relaxed under the clip a job plays: where a frame crushes or stretches an edge past TOLERANCE, the
+weights around it move, as little as the clip needs.
+
+The skin stage predicts weights without the motion; the motion stage knows every frame the character will play.
+The weights of the vertices within RINGS edges of an edge whose length leaves (1 ± TOLERANCE) × its bind length in
+some frame are moved by projected gradient descent (Adam steps, each row projected back onto the simplex) on
+
+    Σ_edges mean_frames max(0, |length / bind length − 1| − TOLERANCE)²  +  CLOSENESS · Σ_vertices |w − w₀|²
+
+over the joints the vertex or its neighbours already use (no joint enters a region it had no weight in). Every other
+vertex keeps its weights bit for bit, and so does any part no frame deforms. The work is on the welded surface (seam
+copies of a vertex keep one row, as the skin stage leaves them). Frames: the FRAMES / 2 with the worst edge tails
+and FRAMES / 2 evenly spaced over the clip; the loss looks at those, the figures returned at every frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import torch
+
+from simcore.arrays import smallest_k
+from simcore.geometry.laplacian import adjacency, edges
+from simcore.geometry.weld import weld_vertices
+from simcore.skinning.lbs import linear_blend
+from simcore.skinning.postprocess import top_k
+
+TOLERANCE = 0.02  # |stretch − 1| an edge may reach at no cost: about what one pixel of a framed character shows
+CLOSENESS = 0.003  # cost of a squared weight change against a squared excess stretch of one edge in every frame
+RINGS = 2  # vertices this many edges from an offending edge may move, so a blend can widen
+CANDIDATES = 8  # joints a moving vertex may share weight between: its own first, then its neighbours' by mass
+FRAMES = 32
+STEPS = 80
+STEP_SIZE = 0.02
+MIN_EDGE = 1e-6  # × model size: shorter bind edges (coincident vertices) have no stretch
+BLOCK_VALUES = 4_000_000  # frames × edges measured at once
+MAX_TERMS = 30_000_000  # frames × moving vertices × candidates held for the descent (≈ 360 MB of float32 positions)
+
+
+@dataclass
+class Relaxation:
+    """weights: (V, J) float32 CSR, rows summing to 1; the figures are for report["motion"]["relaxation"]."""
+
+    weights: sp.csr_matrix
+    vertices_moved: int
+    edges_over_before: int  # edges past the tolerance in some frame of the clip
+    edges_over_after: int
+    mean_row_change: float  # mean L1 change of a moved vertex's row
+
+    def figures(self) -> dict[str, float | int]:
+        return {"vertices_moved": self.vertices_moved, "edges_over_before": self.edges_over_before,
+                "edges_over_after": self.edges_over_after, "mean_row_change": round(self.mean_row_change, 5),
+                "tolerance": TOLERANCE}
+
+
+def _stretch(vertices: np.ndarray, weights: sp.csr_matrix, mats: np.ndarray, e: np.ndarray,
+                 rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """((E,) worst |length / bind length − 1| of each edge over the frames, (T,) each frame's 99th percentile of it)."""
+    worst = np.zeros(len(e))
+    tails = []
+    step = max(1, BLOCK_VALUES // max(len(e), 1))
+    for start in range(0, len(mats), step):
+        posed = linear_blend(vertices, weights, mats[start:start + step])  # (t, V, 3)
+        d = posed[:, e[:, 0]] - posed[:, e[:, 1]]
+        deviation = np.abs(np.sqrt(np.einsum("tek,tek->te", d, d)) / rest - 1.0)
+        worst = np.maximum(worst, deviation.max(axis=0))
+        tails.append(np.percentile(deviation, 99.0, axis=1))
+    return worst, np.concatenate(tails)
+
+
+def _frames(tails: np.ndarray, count: int) -> np.ndarray:
+    """Sorted frame ids: the count / 2 with the largest tails and count / 2 evenly spaced."""
+    if len(tails) <= count:
+        return np.arange(len(tails))
+    worst = np.argsort(-tails, kind="stable")[:count // 2]
+    even = np.linspace(0, len(tails) - 1, count - count // 2).round().astype(np.int64)
+    return np.unique(np.r_[worst, even])
+
+
+def _candidates(w0: sp.csr_matrix, near: sp.csr_matrix, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """((N, K) joint ids, (N, K) bool real) for `rows`: the joints the row uses, then its neighbours' by mass."""
+    own = w0[rows].toarray()
+    mass = (near[rows] @ w0).toarray()
+    score = mass + 2.0 * (own > 0)  # a row's own joints first: its weights stay representable
+    k = min(CANDIDATES, w0.shape[1])
+    ids = smallest_k(-score, k)
+    return ids, np.take_along_axis(score, ids, axis=1) > 0
+
+
+def _project(w: torch.Tensor, real: torch.Tensor) -> torch.Tensor:
+    """Rows of `w` (N, K) projected onto the probability simplex over their `real` entries (Duchi et al. 2008)."""
+    v = w.masked_fill(~real, -1e9)
+    u, _ = torch.sort(v, dim=1, descending=True)
+    cum = torch.cumsum(u, dim=1) - 1.0
+    ks = torch.arange(1, w.shape[1] + 1, dtype=w.dtype)
+    rho = ((u - cum / ks) > 0).sum(dim=1, keepdim=True).clamp(min=1)
+    theta = torch.gather(cum, 1, rho - 1) / rho
+    return torch.clamp(v - theta, min=0.0) * real
+
+
+def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matrix, mats: np.ndarray,
+                  max_influences: int = 4) -> Relaxation:
+    """`weights` (V, J) of the bind mesh vertices (V, 3) / faces (F, 3) relaxed under the clip's skinning
+    matrices mats (T, J, 4, 4); see the module docstring."""
+    welded = weld_vertices(vertices, faces)
+    v, f = welded.vertices, welded.faces
+    first = np.unique(welded.index, return_index=True)[1]
+    w0 = sp.csr_matrix(weights, dtype=np.float64)[first]
+    e = edges(f)
+    rest = np.linalg.norm(v[e[:, 0]] - v[e[:, 1]], axis=1)
+    keep = rest > MIN_EDGE * (float(np.ptp(v, axis=0).max()) or 1.0)
+    e, rest = e[keep], rest[keep]
+    unchanged = sp.csr_matrix(weights, dtype=np.float32)
+    if not len(e) or not len(mats):
+        return Relaxation(unchanged, 0, 0, 0, 0.0)
+    worst, tails = _stretch(v, w0, mats, e, rest)
+    over = worst > TOLERANCE
+    if not over.any():
+        return Relaxation(unchanged, 0, 0, 0, 0.0)
+    adj = adjacency(f, len(v))
+    near = (adj + sp.identity(len(v), format="csr")).tocsr()
+    moving = np.zeros(len(v), bool)
+    moving[e[over].ravel()] = True
+    for _ in range(RINGS):
+        moving |= np.asarray(near @ moving.astype(np.float64)).ravel() > 0
+    rows = np.flatnonzero(moving)
+    ids, real = _candidates(w0, near, rows)
+    frames = _frames(tails, max(2, min(FRAMES, MAX_TERMS // max(len(rows) * ids.shape[1], 1))))
+    new = _descend(v, w0, mats[frames], e, rest, rows, ids, real)
+    dense = np.zeros((len(rows), w0.shape[1]))
+    np.put_along_axis(dense, ids, new, axis=1)
+    place = sp.csr_matrix((np.ones(len(rows)), (rows, np.arange(len(rows)))), shape=(len(v), len(rows)))
+    relaxed = sp.csr_matrix(sp.diags((~moving).astype(np.float64)) @ w0 + place @ top_k(dense, max_influences))
+    after, _ = _stretch(v, relaxed, mats, e, rest)
+    change = float(np.abs((relaxed - w0)[rows]).sum(axis=1).mean())
+    out = sp.csr_matrix(relaxed[welded.index], dtype=np.float32)
+    out.eliminate_zeros()
+    return Relaxation(out, len(rows), int(over.sum()), int((after > TOLERANCE).sum()), change)
+
+
+def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, e: np.ndarray, rest: np.ndarray, rows: np.ndarray,
+             ids: np.ndarray, real: np.ndarray) -> np.ndarray:
+    """(N, K) weights of the moving `rows` over their candidate joints `ids` after the descent."""
+    n = len(v)
+    slot = np.full(n, -1)
+    slot[rows] = np.arange(len(rows))
+    loss_edges = (slot[e[:, 0]] >= 0) | (slot[e[:, 1]] >= 0)
+    e, rest = e[loss_edges], rest[loss_edges]
+    ends = np.unique(e.ravel())
+    fixed = ends[slot[ends] < 0]
+    fixed_pos = np.zeros((len(mats), n, 3))
+    fixed_pos[:, fixed] = linear_blend(v[fixed], w0[fixed], mats)
+    # Each moving vertex's position under each candidate joint: (T, N, K, 3).
+    m = mats[:, ids, :3, :]  # (T, N, K, 3, 4)
+    under = torch.from_numpy((np.einsum("tnkab,nb->tnka", m[..., :3], v[rows]) + m[..., 3]).astype(np.float32))
+    fixed_t = torch.from_numpy(fixed_pos.astype(np.float32))
+    start = torch.from_numpy(np.take_along_axis(w0[rows].toarray(), ids, axis=1).astype(np.float32))
+    mask = torch.from_numpy(real)
+    a, b = torch.from_numpy(e[:, 0]), torch.from_numpy(e[:, 1])
+    rest_t = torch.from_numpy(rest.astype(np.float32))
+    w = start.clone().requires_grad_(True)
+    optimiser = torch.optim.Adam([w], lr=STEP_SIZE)
+
+    def positions(weights: torch.Tensor) -> torch.Tensor:
+        moved = torch.einsum("tnkc,nk->tnc", under, weights)  # (T, N, 3)
+        pos = fixed_t.clone()
+        pos[:, torch.from_numpy(rows)] = moved
+        return pos
+
+    for _ in range(STEPS):
+        optimiser.zero_grad()
+        pos = positions(w)
+        length = torch.linalg.norm(pos[:, a] - pos[:, b], dim=2).clamp(min=1e-12)
+        excess = torch.relu((length / rest_t - 1.0).abs() - TOLERANCE)
+        loss = (excess**2).mean(dim=0).sum() + CLOSENESS * ((w - start) ** 2).sum()
+        loss.backward()
+        with torch.no_grad():  # only moves along the simplex: a shift of every weight alike is no move at all
+            assert w.grad is not None
+            g = w.grad * mask
+            g -= mask * (g.sum(dim=1, keepdim=True) / mask.sum(dim=1, keepdim=True).clamp(min=1))
+            w.grad.copy_(g)
+        optimiser.step()
+        with torch.no_grad():
+            w.copy_(_project(w, mask))
+    return w.detach().double().numpy()
