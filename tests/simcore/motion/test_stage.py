@@ -154,11 +154,14 @@ def test_the_clip_relaxes_the_weights_unless_asked_not_to(tmp_path):
     kept = _state(tmp_path, _walk_bvh(tmp_path), "bvh", fps=10, relax_weights=False)
     skin = kept.weights
     assert skin is not None
+    shape = skin.shape
     stage.run(kept, _progress([]))
     assert kept.weights is skin and kept.report["motion"]["relaxation"] is None
     relaxed = _state(tmp_path, _walk_bvh(tmp_path), "bvh", fps=10)
     stage.run(relaxed, _progress([]))
     figures = relaxed.report["motion"]["relaxation"]
     assert set(figures) == {"vertices_moved", "edges_over_before", "edges_over_after", "mean_row_change", "tolerance"}
-    assert relaxed.weights is not None and relaxed.weights.shape == skin.shape
-    np.testing.assert_allclose(np.asarray(relaxed.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
+    out = relaxed.weights
+    assert out is not None
+    assert out.shape == shape
+    np.testing.assert_allclose(np.asarray(out.sum(axis=1)).ravel(), 1.0, atol=1e-5)
