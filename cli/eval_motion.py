@@ -72,6 +72,8 @@ def eval_motion(
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
     options: Annotated[str, typer.Option(help="JobOptions as JSON for our rig, e.g. '{\"skeleton\": \"keep\"}'")] = "{}",
+    held_out: Annotated[bool, typer.Option(help="relax the weights under the character's next clip, then play "
+                                                "this one on them (characters with one clip are error rows)")] = False,
 ) -> None:
     """Play each character's own clips on the rig a job makes and compare with the artist's animation."""
     from cli.job_options import parse_job_options
@@ -81,7 +83,8 @@ def eval_motion(
     console = Console()
     with console.status("retargeting…") as status:
         report = evaluate_motion(directory, use_predicted=not artist_only, only=set(only) if only else None, split=split,
-                                 on_asset=lambda n: status.update(f"retargeting {n}"), options=job_options)
+                                 on_asset=lambda n: status.update(f"retargeting {n}"), options=job_options,
+                                 held_out=held_out)
     render(report, console)
     write_report_json(console, json_path, report.to_dict())
 

@@ -20,6 +20,9 @@ For every rigged .glb/.gltf in DIR that carries animation clips (loader stress t
   pixel of a view that frames the whole character 1000 pixels high (PIXEL × the model size), and at least
   MIN_DEVIATION: an artist rig of rigid parts stretches nothing, and a ratio to zero would make any smooth
   skinning fail however invisible its stretch. Volume: lowest and highest enclosed volume / bind volume.
+The motion stage relaxes the weights under the clip it plays (`motion/relax_weights.py`); `held_out` relaxes them
+under the character's next clip instead and plays this one on them, so the figures show what the relaxation does to
+a motion it never saw.
 Humanoids also get `mocap_cmu_01_01.bvh` retargeted at 30 fps and their soles' sliding speed while in
 contact, for our rig and (as a reference measured in the same run) the artist's rig.
 """
@@ -221,15 +224,16 @@ def job_rig(path: Path, workdir: Path, options: JobOptions | None = None) -> Pip
     return run_pipeline(PipelineInputs(path, path.suffix.lstrip(".").lower()), options, workdir)
 
 
-def job_clip(state: PipelineState, clip: int) -> tuple[dict[str, Any], list[str]]:
-    """The job's motion stage for the upload's own clip `clip` and the gate's motion check on its result:
-    (report["quality"]["motion"], the codes of the warnings it added)."""
+def job_clip(state: PipelineState, clip: int, relax: bool = True) -> tuple[dict[str, Any], list[str]]:
+    """The job's motion stage for the upload's own clip `clip` (weights relaxed under it unless not `relax`) and
+    the gate's motion check on its result: (report["quality"]["motion"], the codes of the warnings it added)."""
     from simcore.gate.checks import check_stage
     from simcore.motion import stage as motion_stage
     from simcore.pipeline import StageProgress
 
     options = state.options
-    state.options = options.model_copy(update={"motion": options.motion.model_copy(update={"clip": clip}),
+    motion = options.motion.model_copy(update={"clip": clip, "relax_weights": relax and options.motion.relax_weights})
+    state.options = options.model_copy(update={"motion": motion,
                                                "stages": [*(options.stages or []), "motion"]})
     before = len(state.report.get("warnings", []))
     try:
@@ -254,9 +258,11 @@ def _bind_frame(state: PipelineState, vertices: np.ndarray) -> tuple[float, np.n
 
 
 def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: sp.csr_matrix, artist_rows: list[MotionRow],
-              mocap: MotionClip | None, workdir: Path, options: JobOptions | None = None) -> list[MotionRow]:
+              mocap: MotionClip | None, workdir: Path, options: JobOptions | None = None,
+              held_out: bool = False) -> list[MotionRow]:
     """Our rig's rows: the job's rig playing each clip (see the module docstring), beside the artist rig's figures
-    that `artist_rows` (one per clip) already hold."""
+    that `artist_rows` (one per clip) already hold. held_out: the weights are relaxed under the character's next
+    clip and then play this one unchanged (how the relaxation carries to a motion it never saw)."""
     name, category = artist_rows[0].name, artist_rows[0].category
     started = time.perf_counter()
     try:
@@ -273,7 +279,11 @@ def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: 
         row = MotionRow(name, category, "ours", clip.animation.name, clip.animation.num_frames, state.skeleton.num_joints,
                         **{f: getattr(artist_rows[k], f) for f in ARTIST_FIELDS})
         try:
-            figures, row.warnings = job_clip(state, k)
+            if held_out and len(clips) < 2:
+                raise SimcoreError("one clip: none other to relax the weights under", code="held_out")
+            if held_out:
+                job_clip(state, (k + 1) % len(clips))
+            figures, row.warnings = job_clip(state, k, relax=not held_out)
             assert state.animation is not None, "the motion stage ran"
             row.mapped, row.method = len(state.report["motion"]["joint_map"]), state.report["motion"]["mapping_method"]
             row.stretch_low, row.stretch_high = figures["stretch_low"], figures["stretch_high"]
@@ -295,7 +305,8 @@ def _job_rows(path: Path, clips: list[tuple[np.ndarray, MotionClip]], artist_w: 
 
 
 def evaluate_character(name: str, category: str, path: Path, doc: GltfDocument, asset: RiggedAsset, use_predicted: bool,
-                       mocap: MotionClip | None, workdir: Path, options: JobOptions | None = None) -> list[MotionRow]:
+                       mocap: MotionClip | None, workdir: Path, options: JobOptions | None = None,
+                       held_out: bool = False) -> list[MotionRow]:
     """Rows for the artist rig (self-check) and, with `use_predicted`, for the job's rig (made with `options`),
     per clip."""
     clips = [world_bind(doc, asset, read_gltf_clip(doc, k, asset=asset)) for k in range(len(doc.items("animations")))]
@@ -316,20 +327,23 @@ def evaluate_character(name: str, category: str, path: Path, doc: GltfDocument, 
         started = time.perf_counter()
         rows.append(row)
     if use_predicted:
-        rows.extend(_job_rows(path, clips, asset.weights, rows, mocap, workdir, options))
+        rows.extend(_job_rows(path, clips, asset.weights, rows, mocap, workdir, options, held_out))
     return rows
 
 
 def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[str] | None = None, split: str | None = None,
-                    on_asset: Callable[[str], None] = lambda name: None, options: JobOptions | None = None) -> MotionEvaluation:
+                    on_asset: Callable[[str], None] = lambda name: None, options: JobOptions | None = None,
+                    held_out: bool = False) -> MotionEvaluation:
     """Evaluate every animated rig in `directory` (see the module docstring); with `split`, only the files
     DIR/MANIFEST.tsv lists for that split (the training corpus layout); `options`: the job options our rig is
-    made with (stages and gate mode are the eval's)."""
+    made with (stages and gate mode are the eval's); `held_out`: see `_job_rows`."""
     directory = Path(directory)
     report = MotionEvaluation()
     changed = options.model_dump(mode="json", exclude_defaults=True) if options else {}
     if changed:
         report.predictor = f"the job's stages (options {json.dumps(changed, sort_keys=True)})"
+    if held_out:
+        report.predictor += "; weights relaxed under the character's next clip, not the one played"
     mocap_path = directory / MOCAP
     mocap = parse_bvh(mocap_path.read_bytes(), name=mocap_path.stem) if mocap_path.is_file() else None
     paths = {p.stem: p for p in asset_files(directory, split)}
@@ -342,5 +356,5 @@ def evaluate_motion(directory: Path, *, use_predicted: bool = True, only: set[st
                 continue
             on_asset(name)
             report.rows.extend(evaluate_character(name, category, paths[name], doc, asset, use_predicted, mocap,
-                                                  Path(work) / name, options))
+                                                  Path(work) / name, options, held_out))
     return report

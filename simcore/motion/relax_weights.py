@@ -36,7 +36,8 @@ STEPS = 80
 STEP_SIZE = 0.02
 MIN_EDGE = 1e-6  # × model size: shorter bind edges (coincident vertices) have no stretch
 BLOCK_VALUES = 4_000_000  # frames × edges measured at once
-MAX_TERMS = 30_000_000  # frames × moving vertices × candidates held for the descent (≈ 360 MB of float32 positions)
+MAX_TERMS = 12_000_000  # frames × moving vertices × candidates held for the descent (≈ 140 MB of float32 positions)
+CHUNK_ROWS = 4096  # moving vertices whose candidate positions are computed at once
 
 
 @dataclass
@@ -143,30 +144,32 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
 def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, e: np.ndarray, rest: np.ndarray, rows: np.ndarray,
              ids: np.ndarray, real: np.ndarray) -> np.ndarray:
     """(N, K) weights of the moving `rows` over their candidate joints `ids` after the descent."""
-    n = len(v)
-    slot = np.full(n, -1)
-    slot[rows] = np.arange(len(rows))
-    loss_edges = (slot[e[:, 0]] >= 0) | (slot[e[:, 1]] >= 0)
-    e, rest = e[loss_edges], rest[loss_edges]
-    ends = np.unique(e.ravel())
-    fixed = ends[slot[ends] < 0]
-    fixed_pos = np.zeros((len(mats), n, 3))
-    fixed_pos[:, fixed] = linear_blend(v[fixed], w0[fixed], mats)
-    # Each moving vertex's position under each candidate joint: (T, N, K, 3).
-    m = mats[:, ids, :3, :]  # (T, N, K, 3, 4)
-    under = torch.from_numpy((np.einsum("tnkab,nb->tnka", m[..., :3], v[rows]) + m[..., 3]).astype(np.float32))
-    fixed_t = torch.from_numpy(fixed_pos.astype(np.float32))
+    moving = np.zeros(len(v), bool)
+    moving[rows] = True
+    near = moving[e[:, 0]] | moving[e[:, 1]]  # the edges the loss reads
+    e, rest = e[near], rest[near]
+    ends = np.unique(e.ravel())  # every moving row is one (its edges are read); the other ends stay where they are
+    local = np.searchsorted(ends, e)  # (E', 2) into `ends`
+    fixed = ends[~moving[ends]]
+    fixed_pos = np.zeros((len(mats), len(ends), 3), np.float32)
+    fixed_pos[:, np.searchsorted(ends, fixed)] = linear_blend(v[fixed], w0[fixed], mats)
+    under = np.empty((len(mats), len(rows), ids.shape[1], 3), np.float32)  # each row's place under each candidate
+    for c in range(0, len(rows), CHUNK_ROWS):
+        part = slice(c, c + CHUNK_ROWS)
+        m = mats[:, ids[part], :3, :]  # (T, c, K, 3, 4)
+        under[:, part] = np.einsum("tnkab,nb->tnka", m[..., :3], v[rows[part]]) + m[..., 3]
+    under_t, fixed_t = torch.from_numpy(under), torch.from_numpy(fixed_pos)
+    slot = torch.from_numpy(np.searchsorted(ends, rows))
     start = torch.from_numpy(np.take_along_axis(w0[rows].toarray(), ids, axis=1).astype(np.float32))
     mask = torch.from_numpy(real)
-    a, b = torch.from_numpy(e[:, 0]), torch.from_numpy(e[:, 1])
+    a, b = torch.from_numpy(local[:, 0]), torch.from_numpy(local[:, 1])
     rest_t = torch.from_numpy(rest.astype(np.float32))
     w = start.clone().requires_grad_(True)
     optimiser = torch.optim.Adam([w], lr=STEP_SIZE)
 
     def positions(weights: torch.Tensor) -> torch.Tensor:
-        moved = torch.einsum("tnkc,nk->tnc", under, weights)  # (T, N, 3)
         pos = fixed_t.clone()
-        pos[:, torch.from_numpy(rows)] = moved
+        pos[:, slot] = torch.einsum("tnkc,nk->tnc", under_t, weights)
         return pos
 
     for _ in range(STEPS):

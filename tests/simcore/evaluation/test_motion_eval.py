@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simcore.evaluation.motion_eval import MIN_DEVIATION, STRETCH_BOUND, MotionRow, deviation_floor, evaluate_motion
+from simcore.evaluation.motion_eval import MIN_DEVIATION, STRETCH_BOUND, MotionRow, deviation_floor, evaluate_motion, job_clip
 from simcore.options import JobOptions, MotionOptions
 from simcore.pipeline import PipelineInputs, run_pipeline
 
@@ -87,3 +87,20 @@ def test_our_rig_can_be_made_with_other_options(dev_assets):
     assert report.predictor == "the job's stages (options {\"skeleton\": \"keep\"})"
     assert report.stretch_geomean() == pytest.approx(ours.stretch_ratio)
     assert report.to_dict()["stretch_ratio_geomean"] == report.stretch_geomean()
+
+
+def test_held_out_rows_play_each_clip_on_weights_relaxed_under_the_next(dev_assets, tmp_path):
+    """--held-out: the fox's Walk is played on the weights a job playing its Run (the next clip) relaxed, unchanged;
+    a character with one clip has nothing to hold out and is an error row."""
+    report = evaluate_motion(dev_assets, only={"fox", "rigged_simple"}, held_out=True)
+    simple = next(r for r in report.rows if r.target == "ours" and r.name == "rigged_simple")
+    assert simple.error is not None and simple.error.startswith("held_out")
+    walk = next(r for r in report.rows if r.target == "ours" and r.clip == "Walk")
+    own = next(r for r in evaluate_motion(dev_assets, only={"fox"}).rows if r.target == "ours" and r.clip == "Walk")
+    options = JobOptions(stages=["skeleton", "skin", "motion"], quality_gate="warn", motion=MotionOptions(clip="Run"))
+    state = run_pipeline(PipelineInputs(dev_assets / "fox.glb", "glb"), options, tmp_path / "job")
+    assert state.report["motion"]["relaxation"]["vertices_moved"] > 0
+    figures, _ = job_clip(state, 1, relax=False)  # Walk on the weights Run relaxed
+    assert (walk.stretch_low, walk.stretch_high) == (figures["stretch_low"], figures["stretch_high"])
+    assert (walk.stretch_low, walk.stretch_high) != (own.stretch_low, own.stretch_high)
+    assert "next clip" in report.predictor
