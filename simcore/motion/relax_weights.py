@@ -38,6 +38,7 @@ MIN_EDGE = 1e-6  # × model size: shorter bind edges (coincident vertices) have 
 BLOCK_VALUES = 4_000_000  # frames × edges measured at once
 MAX_TERMS = 12_000_000  # frames × moving vertices × candidates held for the descent (≈ 140 MB of float32 positions)
 CHUNK_ROWS = 4096  # moving vertices whose candidate positions are computed at once
+DENSE_ROWS = 32_768  # moving vertices whose rows are made dense over the joints at once
 
 
 @dataclass
@@ -80,14 +81,29 @@ def _frames(tails: np.ndarray, count: int) -> np.ndarray:
     return np.unique(np.r_[worst, even])
 
 
-def _candidates(w0: sp.csr_matrix, near: sp.csr_matrix, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """((N, K) joint ids, (N, K) bool real) for `rows`: the joints the row uses, then its neighbours' by mass."""
-    own = w0[rows].toarray()
-    mass = (near[rows] @ w0).toarray()
-    score = mass + 2.0 * (own > 0)  # a row's own joints first: its weights stay representable
+def _candidates(w0: sp.csr_matrix, near: sp.csr_matrix, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """((N, K) joint ids, (N, K) bool real, (N, K) their weights) for `rows`: the joints the row uses, then its
+    neighbours' by mass (dense over the joints one block of rows at a time)."""
     k = min(CANDIDATES, w0.shape[1])
-    ids = smallest_k(-score, k)
-    return ids, np.take_along_axis(score, ids, axis=1) > 0
+    ids, real, start = (np.empty((len(rows), k), t) for t in (np.int64, bool, np.float64))
+    for c in range(0, len(rows), DENSE_ROWS):
+        part = slice(c, c + DENSE_ROWS)
+        own = w0[rows[part]].toarray()
+        score = (near[rows[part]] @ w0).toarray() + 2.0 * (own > 0)  # a row's own joints first: its weights stay representable
+        ids[part] = smallest_k(-score, k)
+        real[part] = np.take_along_axis(score, ids[part], axis=1) > 0
+        start[part] = np.take_along_axis(own, ids[part], axis=1)
+    return ids, real, start
+
+
+def _placed(ids: np.ndarray, values: np.ndarray, joints: int, max_influences: int) -> sp.csr_matrix:
+    """(N, joints) CSR of each row's `values` (N, K) at its joints `ids`, top `max_influences` kept."""
+    blocks = []
+    for c in range(0, len(ids), DENSE_ROWS):
+        dense = np.zeros((len(ids[c:c + DENSE_ROWS]), joints))
+        np.put_along_axis(dense, ids[c:c + DENSE_ROWS], values[c:c + DENSE_ROWS], axis=1)
+        blocks.append(top_k(dense, max_influences))
+    return sp.csr_matrix(sp.vstack(blocks))
 
 
 def _project(w: torch.Tensor, real: torch.Tensor) -> torch.Tensor:
@@ -127,13 +143,12 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
     for _ in range(RINGS):
         moving |= np.asarray(near @ moving.astype(np.float64)).ravel() > 0
     rows = np.flatnonzero(moving)
-    ids, real = _candidates(w0, near, rows)
+    ids, real, start = _candidates(w0, near, rows)
     frames = _frames(tails, max(2, min(FRAMES, MAX_TERMS // max(len(rows) * ids.shape[1], 1))))
-    new = _descend(v, w0, mats[frames], e, rest, rows, ids, real)
-    dense = np.zeros((len(rows), w0.shape[1]))
-    np.put_along_axis(dense, ids, new, axis=1)
+    new = _descend(v, w0, mats[frames], e, rest, rows, ids, real, start)
     place = sp.csr_matrix((np.ones(len(rows)), (rows, np.arange(len(rows)))), shape=(len(v), len(rows)))
-    relaxed = sp.csr_matrix(sp.diags((~moving).astype(np.float64)) @ w0 + place @ top_k(dense, max_influences))
+    relaxed = sp.csr_matrix(sp.diags((~moving).astype(np.float64)) @ w0
+                            + place @ _placed(ids, new, w0.shape[1], max_influences))
     after, _ = _stretch(v, relaxed, mats, e, rest)
     change = float(np.abs((relaxed - w0)[rows]).sum(axis=1).mean())
     out = sp.csr_matrix(relaxed[welded.index], dtype=np.float32)
@@ -142,8 +157,9 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
 
 
 def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, e: np.ndarray, rest: np.ndarray, rows: np.ndarray,
-             ids: np.ndarray, real: np.ndarray) -> np.ndarray:
-    """(N, K) weights of the moving `rows` over their candidate joints `ids` after the descent."""
+             ids: np.ndarray, real: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """(N, K) weights of the moving `rows` over their candidate joints `ids` (starting from `weights`) after the
+    descent."""
     moving = np.zeros(len(v), bool)
     moving[rows] = True
     near = moving[e[:, 0]] | moving[e[:, 1]]  # the edges the loss reads
@@ -160,7 +176,7 @@ def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, e: np.ndarray, 
         under[:, part] = np.einsum("tnkab,nb->tnka", m[..., :3], v[rows[part]]) + m[..., 3]
     under_t, fixed_t = torch.from_numpy(under), torch.from_numpy(fixed_pos)
     slot = torch.from_numpy(np.searchsorted(ends, rows))
-    start = torch.from_numpy(np.take_along_axis(w0[rows].toarray(), ids, axis=1).astype(np.float32))
+    start = torch.from_numpy(weights.astype(np.float32))
     mask = torch.from_numpy(real)
     a, b = torch.from_numpy(local[:, 0]), torch.from_numpy(local[:, 1])
     rest_t = torch.from_numpy(rest.astype(np.float32))
