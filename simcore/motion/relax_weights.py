@@ -7,7 +7,9 @@ some frame are moved by projected gradient descent (Adam steps, each row project
 
     Σ_edges mean_frames max(0, |length / bind length − 1| − TOLERANCE)²  +  CLOSENESS · Σ_vertices |w − w₀|²
 
-over the joints the vertex or its neighbours already use (no joint enters a region it had no weight in). Every other
+over the joints the vertex or its neighbours already use (no joint enters a region it had no weight in). On a mesh
+that encloses a volume, each frame's volume change past VOLUME_TOLERANCE adds its square, as if every edge the loss
+reads had that excess (the volume is the quality gate's). Every other
 vertex keeps its weights bit for bit, and so does any part no frame deforms. The work is on the welded surface (seam
 copies of a vertex keep one row, as the skin stage leaves them). Frames: the FRAMES / 2 with the worst edge tails
 and FRAMES / 2 evenly spaced over the clip; the loss looks at those, the figures returned at every frame.
@@ -15,6 +17,7 @@ and FRAMES / 2 evenly spaced over the clip; the loss looks at those, the figures
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,12 +25,15 @@ import scipy.sparse as sp
 import torch
 
 from simcore.arrays import smallest_k
+from simcore.gate.measures import MIN_ENCLOSED
 from simcore.geometry.laplacian import adjacency, edges
 from simcore.geometry.weld import weld_vertices
+from simcore.mpm.measures import part_centres, part_volumes, volume_parts
 from simcore.skinning.lbs import linear_blend
 from simcore.skinning.postprocess import top_k
 
 TOLERANCE = 0.02  # |stretch − 1| an edge may reach at no cost: about what one pixel of a framed character shows
+VOLUME_TOLERANCE = 0.02  # |volume / bind volume − 1| a frame may reach at no cost
 CLOSENESS = 0.003  # cost of a squared weight change against a squared excess stretch of one edge in every frame
 RINGS = 2  # vertices this many edges from an offending edge may move, so a blend can widen
 CANDIDATES = 8  # joints a moving vertex may share weight between: its own first, then its neighbours' by mass
@@ -145,7 +151,8 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
     rows = np.flatnonzero(moving)
     ids, real, start = _candidates(w0, near, rows)
     frames = _frames(tails, max(2, min(FRAMES, MAX_TERMS // max(len(rows) * ids.shape[1], 1))))
-    new = _descend(v, w0, mats[frames], e, rest, rows, ids, real, start)
+    region = _Region.around(moving, rows, e, rest, f)
+    new = _descend(v, w0, mats[frames], region, rows, ids, real, start, _volume_loss(v, f, w0, mats[frames], region))
     place = sp.csr_matrix((np.ones(len(rows)), (rows, np.arange(len(rows)))), shape=(len(v), len(rows)))
     relaxed = sp.csr_matrix(sp.diags((~moving).astype(np.float64)) @ w0
                             + place @ _placed(ids, new, w0.shape[1], max_influences))
@@ -156,30 +163,75 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
     return Relaxation(out, len(rows), int(over.sum()), int((after > TOLERANCE).sum()), change)
 
 
-def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, e: np.ndarray, rest: np.ndarray, rows: np.ndarray,
-             ids: np.ndarray, real: np.ndarray, weights: np.ndarray) -> np.ndarray:
+@dataclass
+class _Region:
+    """What the descent reads: the ends of every edge with a moving vertex, those edges and the faces touching a
+    moving vertex (both as ids into `ends`), and where each moving row sits in `ends`."""
+
+    ends: np.ndarray
+    edges: np.ndarray
+    rest: np.ndarray
+    faces: np.ndarray
+    touching: np.ndarray  # (F,) bool: the mesh's faces with a moving corner
+    slot: np.ndarray
+
+    @classmethod
+    def around(cls, moving: np.ndarray, rows: np.ndarray, e: np.ndarray, rest: np.ndarray, f: np.ndarray) -> _Region:
+        read = moving[e[:, 0]] | moving[e[:, 1]]
+        ends = np.unique(e[read].ravel())  # every corner of a touching face is an end: an edge joins it to the mover
+        touching = moving[f].any(axis=1)
+        return cls(ends, np.searchsorted(ends, e[read]), rest[read], np.searchsorted(ends, f[touching]), touching,
+                   np.searchsorted(ends, rows))
+
+
+def _volume_loss(v: np.ndarray, f: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, region: _Region
+                 ) -> Callable[[torch.Tensor], torch.Tensor] | None:
+    """Squared excess of each frame's volume change over VOLUME_TOLERANCE (mean over frames) as a function of the
+    region's positions (T, M, 3); None when the mesh encloses no volume. The volume is the quality gate's (parts'
+    cones from their own centres); the centres stay where the skin stage's weights put them, and the faces away
+    from the moving vertices are a constant per frame."""
+    parts = volume_parts(v, f)
+    bind = float(part_volumes(v, f, parts).sum())
+    if abs(bind) <= MIN_ENCLOSED * float(np.prod(np.ptp(v, axis=0))):
+        return None
+    apex = np.empty((len(mats), len(region.faces), 3))
+    constant = np.empty(len(mats))
+    for t, frame in enumerate(mats):
+        posed = linear_blend(v, w0, frame)
+        apex[t] = part_centres(posed, f, parts)[parts[region.touching]]
+        a, b, c = (posed[f[region.touching][:, k]] - apex[t] for k in range(3))
+        constant[t] = part_volumes(posed, f, parts).sum() - np.einsum("fi,fi->", a, np.cross(b, c)) / 6.0
+    apex_t, constant_t = torch.from_numpy(apex.astype(np.float32)), torch.from_numpy(constant.astype(np.float32))
+    faces = torch.from_numpy(region.faces)
+
+    def loss(pos: torch.Tensor) -> torch.Tensor:
+        a, b, c = (pos[:, faces[:, k]] - apex_t for k in range(3))
+        volume = constant_t + (a * torch.linalg.cross(b, c)).sum(dim=(1, 2)) / 6.0
+        return (torch.relu((volume / bind - 1.0).abs() - VOLUME_TOLERANCE) ** 2).mean()
+
+    return loss
+
+
+def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, region: _Region, rows: np.ndarray, ids: np.ndarray,
+             real: np.ndarray, weights: np.ndarray, volume: Callable[[torch.Tensor], torch.Tensor] | None) -> np.ndarray:
     """(N, K) weights of the moving `rows` over their candidate joints `ids` (starting from `weights`) after the
     descent."""
     moving = np.zeros(len(v), bool)
     moving[rows] = True
-    near = moving[e[:, 0]] | moving[e[:, 1]]  # the edges the loss reads
-    e, rest = e[near], rest[near]
-    ends = np.unique(e.ravel())  # every moving row is one (its edges are read); the other ends stay where they are
-    local = np.searchsorted(ends, e)  # (E', 2) into `ends`
-    fixed = ends[~moving[ends]]
-    fixed_pos = np.zeros((len(mats), len(ends), 3), np.float32)
-    fixed_pos[:, np.searchsorted(ends, fixed)] = linear_blend(v[fixed], w0[fixed], mats)
+    fixed = region.ends[~moving[region.ends]]
+    fixed_pos = np.zeros((len(mats), len(region.ends), 3), np.float32)
+    fixed_pos[:, np.searchsorted(region.ends, fixed)] = linear_blend(v[fixed], w0[fixed], mats)
     under = np.empty((len(mats), len(rows), ids.shape[1], 3), np.float32)  # each row's place under each candidate
     for c in range(0, len(rows), CHUNK_ROWS):
         part = slice(c, c + CHUNK_ROWS)
         m = mats[:, ids[part], :3, :]  # (T, c, K, 3, 4)
         under[:, part] = np.einsum("tnkab,nb->tnka", m[..., :3], v[rows[part]]) + m[..., 3]
     under_t, fixed_t = torch.from_numpy(under), torch.from_numpy(fixed_pos)
-    slot = torch.from_numpy(np.searchsorted(ends, rows))
+    slot = torch.from_numpy(region.slot)
     start = torch.from_numpy(weights.astype(np.float32))
     mask = torch.from_numpy(real)
-    a, b = torch.from_numpy(local[:, 0]), torch.from_numpy(local[:, 1])
-    rest_t = torch.from_numpy(rest.astype(np.float32))
+    a, b = torch.from_numpy(region.edges[:, 0]), torch.from_numpy(region.edges[:, 1])
+    rest_t = torch.from_numpy(region.rest.astype(np.float32))
     w = start.clone().requires_grad_(True)
     optimiser = torch.optim.Adam([w], lr=STEP_SIZE)
 
@@ -194,6 +246,8 @@ def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, e: np.ndarray, 
         length = torch.linalg.norm(pos[:, a] - pos[:, b], dim=2).clamp(min=1e-12)
         excess = torch.relu((length / rest_t - 1.0).abs() - TOLERANCE)
         loss = (excess**2).mean(dim=0).sum() + CLOSENESS * ((w - start) ** 2).sum()
+        if volume is not None:  # the volume counts as the same excess on every edge the loss reads would
+            loss = loss + len(region.edges) * volume(pos)
         loss.backward()
         with torch.no_grad():  # only moves along the simplex: a shift of every weight alike is no move at all
             assert w.grad is not None

@@ -24,6 +24,16 @@ def volume_parts(vertices: np.ndarray, faces: np.ndarray, weld: float = 1e-6) ->
     return vertex_parts(vertices, faces, weld)[faces[:, 0]]
 
 
+def part_centres(vertices: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) -> np.ndarray:
+    """(P, 3) each part's centre, the mean of its faces' corners, of one frame's vertices (V, 3)."""
+    parts = int(face_parts.max()) + 1 if len(face_parts) else 0
+    corner_parts = np.repeat(face_parts, 3)
+    counts = np.bincount(corner_parts, minlength=parts).astype(np.float64)
+    corners = np.asarray(vertices, np.float64)[np.asarray(faces, np.int64).reshape(-1)]  # (3F, 3)
+    sums = np.stack([np.bincount(corner_parts, corners[:, k], minlength=parts) for k in range(3)], 1)
+    return sums / np.maximum(counts, 1.0)[:, None]
+
+
 def part_volumes(frames: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) -> np.ndarray:
     """(T, P) signed volume of each part's triangles as cones from that part's vertex centroid in the same frame.
 
@@ -35,14 +45,9 @@ def part_volumes(frames: np.ndarray, faces: np.ndarray, face_parts: np.ndarray) 
     f = f[None] if f.ndim == 2 else f
     faces = np.asarray(faces, np.int64)
     parts = int(face_parts.max()) + 1 if len(face_parts) else 0
-    corner_parts = np.repeat(face_parts, 3)
-    counts = np.bincount(corner_parts, minlength=parts).astype(np.float64)
     out = np.zeros((len(f), parts))
     for t in range(len(f)):
-        corners = f[t][faces.reshape(-1)]  # (3F, 3); a part's centre is the mean of its faces' corners
-        sums = np.stack([np.bincount(corner_parts, corners[:, k], minlength=parts) for k in range(3)], 1)
-        centre = sums.astype(np.float64) / np.maximum(counts, 1.0)[:, None]
-        apex = centre[face_parts]
+        apex = part_centres(f[t], faces, face_parts)[face_parts]
         a, b, c = (f[t][faces[:, k]] - apex for k in range(3))
         triple = np.einsum("fi,fi->f", a, np.cross(b, c))
         out[t] = np.bincount(face_parts, triple, minlength=parts) / 6.0

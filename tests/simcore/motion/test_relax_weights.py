@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
+import torch
 from scipy.spatial.transform import Rotation
 
 from simcore.gate.measures import deformation_series, lbs_blocks
-from simcore.motion.relax_weights import TOLERANCE, relax_weights
+from simcore.geometry.laplacian import edges
+from simcore.motion.relax_weights import TOLERANCE, VOLUME_TOLERANCE, _Region, _volume_loss, relax_weights
+from simcore.skinning.lbs import linear_blend
 from tests.simcore.tube_mesh import tube
 
 
@@ -81,3 +85,21 @@ def test_seam_copies_of_a_vertex_keep_one_row() -> None:
     out = relax_weights(vertices, faces, weights, _bend()).weights.toarray()
     assert not np.allclose(out[seam], weights.toarray()[seam])  # the seam runs across the bend: it moved
     np.testing.assert_array_equal(out[seam], out[copies])
+
+
+def test_the_volume_term_reads_the_gates_volume_on_the_region_it_moves() -> None:
+    """The loss's volume of each frame, built from the moving region alone, is the quality gate's volume."""
+    vertices, faces, _ = tube(rings=21)
+    weights, mats = _step(vertices), _bend()
+    e = edges(faces)
+    rest = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
+    moving = np.abs(vertices[:, 1] - 1.0) < 0.25
+    rows = np.flatnonzero(moving)
+    region = _Region.around(moving, rows, e, rest, faces)
+    loss = _volume_loss(vertices, faces, weights, mats, region)
+    assert loss is not None
+    posed = linear_blend(vertices, weights, mats)[:, region.ends]
+    ratio = deformation_series(vertices, faces, lbs_blocks(vertices, weights, mats)).volume_ratio
+    assert ratio is not None and ratio.max() > 1.0 + VOLUME_TOLERANCE  # the bend changes the tube's volume
+    expected = np.mean(np.maximum(np.abs(ratio - 1.0) - VOLUME_TOLERANCE, 0.0) ** 2)
+    assert float(loss(torch.from_numpy(posed.astype(np.float32)))) == pytest.approx(expected, rel=1e-3)
