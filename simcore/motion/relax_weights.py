@@ -42,7 +42,7 @@ STEPS = 80
 STEP_SIZE = 0.02
 MIN_EDGE = 1e-6  # × model size: shorter bind edges (coincident vertices) have no stretch
 BLOCK_VALUES = 4_000_000  # frames × edges measured at once
-MAX_TERMS = 12_000_000  # frames × moving vertices × candidates held for the descent (≈ 140 MB of float32 positions)
+MAX_TERMS = 2_000_000  # frames × moving vertices × candidates per step: bounds the time (~0.1 s a step) and memory
 CHUNK_ROWS = 4096  # moving vertices whose candidate positions are computed at once
 DENSE_ROWS = 32_768  # moving vertices whose rows are made dense over the joints at once
 
@@ -152,7 +152,12 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
     ids, real, start = _candidates(w0, near, rows)
     frames = _frames(tails, max(2, min(FRAMES, MAX_TERMS // max(len(rows) * ids.shape[1], 1))))
     region = _Region.around(moving, rows, e, rest, f)
-    new = _descend(v, w0, mats[frames], region, rows, ids, real, start, _volume_loss(v, f, w0, mats[frames], region))
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # its tensors are small: more threads only wait on each other, the more on a busy machine
+    try:
+        new = _descend(v, w0, mats[frames], region, ids, real, start, _volume_loss(v, f, w0, mats[frames], region))
+    finally:
+        torch.set_num_threads(threads)
     place = sp.csr_matrix((np.ones(len(rows)), (rows, np.arange(len(rows)))), shape=(len(v), len(rows)))
     relaxed = sp.csr_matrix(sp.diags((~moving).astype(np.float64)) @ w0
                             + place @ _placed(ids, new, w0.shape[1], max_influences))
@@ -165,87 +170,86 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
 
 @dataclass
 class _Region:
-    """What the descent reads: the ends of every edge with a moving vertex, those edges and the faces touching a
-    moving vertex (both as ids into `ends`), and where each moving row sits in `ends`."""
+    """What the descent reads: the moving rows, then the other ends of every edge with a moving vertex (`ends`, the
+    moving rows first), those edges and the faces touching a moving vertex (both as ids into `ends`)."""
 
     ends: np.ndarray
+    moving: int  # ends[:moving] are the moving rows, in order
     edges: np.ndarray
     rest: np.ndarray
     faces: np.ndarray
     touching: np.ndarray  # (F,) bool: the mesh's faces with a moving corner
-    slot: np.ndarray
 
     @classmethod
     def around(cls, moving: np.ndarray, rows: np.ndarray, e: np.ndarray, rest: np.ndarray, f: np.ndarray) -> _Region:
         read = moving[e[:, 0]] | moving[e[:, 1]]
-        ends = np.unique(e[read].ravel())  # every corner of a touching face is an end: an edge joins it to the mover
+        others = np.unique(e[read].ravel())  # every corner of a touching face is here: an edge joins it to a mover
+        ends = np.r_[rows, others[~moving[others]]]
+        local = np.full(len(moving), -1)
+        local[ends] = np.arange(len(ends))
         touching = moving[f].any(axis=1)
-        return cls(ends, np.searchsorted(ends, e[read]), rest[read], np.searchsorted(ends, f[touching]), touching,
-                   np.searchsorted(ends, rows))
+        return cls(ends, len(rows), local[e[read]], rest[read], local[f[touching]], touching)
+
+
+def _triple(a: torch.Tensor, b: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
+    """a · (b × c) over the last axis (written out: torch.linalg.cross is several times slower on CPU)."""
+    return (a[..., 0] * (b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1])
+            + a[..., 1] * (b[..., 2] * c[..., 0] - b[..., 0] * c[..., 2])
+            + a[..., 2] * (b[..., 0] * c[..., 1] - b[..., 1] * c[..., 0]))
 
 
 def _volume_loss(v: np.ndarray, f: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, region: _Region
                  ) -> Callable[[torch.Tensor], torch.Tensor] | None:
     """Squared excess of each frame's volume change over VOLUME_TOLERANCE (mean over frames) as a function of the
-    region's positions (T, M, 3); None when the mesh encloses no volume. The volume is the quality gate's (parts'
+    region's positions (M, T, 3); None when the mesh encloses no volume. The volume is the quality gate's (parts'
     cones from their own centres); the centres stay where the skin stage's weights put them, and the faces away
     from the moving vertices are a constant per frame."""
     parts = volume_parts(v, f)
     bind = float(part_volumes(v, f, parts).sum())
     if abs(bind) <= MIN_ENCLOSED * float(np.prod(np.ptp(v, axis=0))):
         return None
-    apex = np.empty((len(mats), len(region.faces), 3))
+    apex = np.empty((len(region.faces), len(mats), 3))
     constant = np.empty(len(mats))
     for t, frame in enumerate(mats):
         posed = linear_blend(v, w0, frame)
-        apex[t] = part_centres(posed, f, parts)[parts[region.touching]]
-        a, b, c = (posed[f[region.touching][:, k]] - apex[t] for k in range(3))
+        apex[:, t] = part_centres(posed, f, parts)[parts[region.touching]]
+        a, b, c = (posed[f[region.touching][:, k]] - apex[:, t] for k in range(3))
         constant[t] = part_volumes(posed, f, parts).sum() - np.einsum("fi,fi->", a, np.cross(b, c)) / 6.0
     apex_t, constant_t = torch.from_numpy(apex.astype(np.float32)), torch.from_numpy(constant.astype(np.float32))
-    faces = torch.from_numpy(region.faces)
+    corners = [torch.from_numpy(region.faces[:, k]) for k in range(3)]
 
     def loss(pos: torch.Tensor) -> torch.Tensor:
-        a, b, c = (pos[:, faces[:, k]] - apex_t for k in range(3))
-        volume = constant_t + (a * torch.linalg.cross(b, c)).sum(dim=(1, 2)) / 6.0
+        a, b, c = (torch.index_select(pos, 0, k) - apex_t for k in corners)  # (F', T, 3)
+        volume = constant_t + _triple(a, b, c).sum(dim=0) / 6.0
         return (torch.relu((volume / bind - 1.0).abs() - VOLUME_TOLERANCE) ** 2).mean()
 
     return loss
 
 
-def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, region: _Region, rows: np.ndarray, ids: np.ndarray,
-             real: np.ndarray, weights: np.ndarray, volume: Callable[[torch.Tensor], torch.Tensor] | None) -> np.ndarray:
-    """(N, K) weights of the moving `rows` over their candidate joints `ids` (starting from `weights`) after the
-    descent."""
-    moving = np.zeros(len(v), bool)
-    moving[rows] = True
-    fixed = region.ends[~moving[region.ends]]
-    fixed_pos = np.zeros((len(mats), len(region.ends), 3), np.float32)
-    fixed_pos[:, np.searchsorted(region.ends, fixed)] = linear_blend(v[fixed], w0[fixed], mats)
-    under = np.empty((len(mats), len(rows), ids.shape[1], 3), np.float32)  # each row's place under each candidate
+def _descend(v: np.ndarray, w0: sp.csr_matrix, mats: np.ndarray, region: _Region, ids: np.ndarray, real: np.ndarray,
+             weights: np.ndarray, volume: Callable[[torch.Tensor], torch.Tensor] | None) -> np.ndarray:
+    """(N, K) weights of the region's moving rows over their candidate joints `ids` (starting from `weights`) after
+    the descent. Positions are vertex-major (M, T, 3): the moving rows' are blended, the other ends' fixed."""
+    rows, fixed = region.ends[:region.moving], region.ends[region.moving:]
+    fixed_t = torch.from_numpy(linear_blend(v[fixed], w0[fixed], mats).transpose(1, 0, 2).astype(np.float32))
+    under = np.empty((len(rows), ids.shape[1], len(mats), 3), np.float32)  # each row's place under each candidate
     for c in range(0, len(rows), CHUNK_ROWS):
         part = slice(c, c + CHUNK_ROWS)
         m = mats[:, ids[part], :3, :]  # (T, c, K, 3, 4)
-        under[:, part] = np.einsum("tnkab,nb->tnka", m[..., :3], v[rows[part]]) + m[..., 3]
-    under_t, fixed_t = torch.from_numpy(under), torch.from_numpy(fixed_pos)
-    slot = torch.from_numpy(region.slot)
+        under[part] = (np.einsum("tnkab,nb->nkta", m[..., :3], v[rows[part]]) + m[..., 3].transpose(1, 2, 0, 3))
+    under_t = torch.from_numpy(under)
     start = torch.from_numpy(weights.astype(np.float32))
     mask = torch.from_numpy(real)
     a, b = torch.from_numpy(region.edges[:, 0]), torch.from_numpy(region.edges[:, 1])
-    rest_t = torch.from_numpy(region.rest.astype(np.float32))
+    rest_t = torch.from_numpy(region.rest.astype(np.float32))[:, None]
     w = start.clone().requires_grad_(True)
     optimiser = torch.optim.Adam([w], lr=STEP_SIZE)
-
-    def positions(weights: torch.Tensor) -> torch.Tensor:
-        pos = fixed_t.clone()
-        pos[:, slot] = torch.einsum("tnkc,nk->tnc", under_t, weights)
-        return pos
-
     for _ in range(STEPS):
         optimiser.zero_grad()
-        pos = positions(w)
-        length = torch.linalg.norm(pos[:, a] - pos[:, b], dim=2).clamp(min=1e-12)
-        excess = torch.relu((length / rest_t - 1.0).abs() - TOLERANCE)
-        loss = (excess**2).mean(dim=0).sum() + CLOSENESS * ((w - start) ** 2).sum()
+        pos = torch.cat([torch.einsum("nktc,nk->ntc", under_t, w), fixed_t])
+        length = torch.linalg.norm(torch.index_select(pos, 0, a) - torch.index_select(pos, 0, b), dim=2).clamp(min=1e-12)
+        excess = torch.relu((length / rest_t - 1.0).abs() - TOLERANCE)  # (E', T)
+        loss = (excess**2).mean(dim=1).sum() + CLOSENESS * ((w - start) ** 2).sum()
         if volume is not None:  # the volume counts as the same excess on every edge the loss reads would
             loss = loss + len(region.edges) * volume(pos)
         loss.backward()

@@ -361,6 +361,7 @@ def test_progress_falls_back_to_polling_when_events_are_blocked(page, dashboard_
     assert page.get_attribute("#job-head [role=progressbar]", "aria-valuenow") == "100"
     page.wait_for_selector("#viewer-stage[data-state=ready]", timeout=60_000)
     assert page.input_value("#viewer-clip") == "Survey"  # the animated result plays the chosen clip
+    assert "Weights relaxed under the clip at" in page.inner_text("#job-summary")  # the fox's Survey bends its legs
 
 
 def test_camera_follows_a_clip_that_walks_away_and_stays_put_when_told(page, dashboard_server, dev_assets):

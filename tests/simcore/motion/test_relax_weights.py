@@ -98,7 +98,7 @@ def test_the_volume_term_reads_the_gates_volume_on_the_region_it_moves() -> None
     region = _Region.around(moving, rows, e, rest, faces)
     loss = _volume_loss(vertices, faces, weights, mats, region)
     assert loss is not None
-    posed = linear_blend(vertices, weights, mats)[:, region.ends]
+    posed = linear_blend(vertices, weights, mats)[:, region.ends].transpose(1, 0, 2)  # vertex-major, as the descent
     ratio = deformation_series(vertices, faces, lbs_blocks(vertices, weights, mats)).volume_ratio
     assert ratio is not None and ratio.max() > 1.0 + VOLUME_TOLERANCE  # the bend changes the tube's volume
     expected = np.mean(np.maximum(np.abs(ratio - 1.0) - VOLUME_TOLERANCE, 0.0) ** 2)

@@ -25,6 +25,10 @@ export function summaryLines(job: Job, report: Report | null): string[] {
   if (typeof skin.method === "string") lines.push(`Skinning: ${skin.method} weights, at most ${skin.max_influences ?? 4} bones per vertex.`);
   if (motion.status === "retargeted") {
     lines.push(`Motion: "${clip.name}" retargeted, ${clip.frames} frames at ${clip.fps} fps (${Number(clip.duration_s).toFixed(2)} s).`);
+    const relaxed = obj(motion.relaxation);
+    if (typeof relaxed.vertices_moved === "number" && relaxed.vertices_moved > 0) {
+      lines.push(`Weights relaxed under the clip at ${relaxed.vertices_moved} vertices, where it crushed or stretched the mesh.`);
+    }
   }
   const timings = Object.values(obj(r.timings_s)).filter((t): t is number => typeof t === "number");
   if (timings.length) lines.push(`Took ${timings.reduce((a, b) => a + b, 0).toFixed(1)} s of compute.`);
