@@ -9,10 +9,10 @@ some frame are moved by projected gradient descent (Adam steps, each row project
 
 over the joints the vertex or its neighbours already use (no joint enters a region it had no weight in). On a mesh
 that encloses a volume, each frame's volume change past VOLUME_TOLERANCE adds its square, as if every edge the loss
-reads had that excess (the volume is the quality gate's). Every other
-vertex keeps its weights bit for bit, and so does any part no frame deforms. The work is on the welded surface (seam
-copies of a vertex keep one row, as the skin stage leaves them). Frames: the FRAMES / 2 with the worst edge tails
-and FRAMES / 2 evenly spaced over the clip; the loss looks at those, the figures returned at every frame.
+reads had that excess (the volume is the quality gate's). Every other vertex keeps its weights bit for bit, and so
+does any part no frame deforms. The work is on the welded surface (seam copies of a vertex keep one row, as the skin
+stage leaves them). Frames: the FRAMES / 2 with the worst edge tails and FRAMES / 2 evenly spaced over the clip; the
+loss looks at those, the figures returned at every frame. The constants' sweep is in the README (Motion section).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import scipy.sparse as sp
 import torch
 
 from simcore.arrays import smallest_k
-from simcore.gate.measures import MIN_ENCLOSED
+from simcore.gate.measures import MIN_EDGE, MIN_ENCLOSED
 from simcore.geometry.laplacian import adjacency, edges
 from simcore.geometry.weld import weld_vertices
 from simcore.mpm.measures import part_centres, part_volumes, volume_parts
@@ -40,7 +40,6 @@ CANDIDATES = 8  # joints a moving vertex may share weight between: its own first
 FRAMES = 32
 STEPS = 80
 STEP_SIZE = 0.02
-MIN_EDGE = 1e-6  # × model size: shorter bind edges (coincident vertices) have no stretch
 BLOCK_VALUES = 4_000_000  # frames × edges measured at once
 MAX_TERMS = 2_000_000  # frames × moving vertices × candidates per step: bounds the time (~0.1 s a step) and memory
 CHUNK_ROWS = 4096  # moving vertices whose candidate positions are computed at once
