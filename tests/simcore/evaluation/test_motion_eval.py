@@ -104,3 +104,12 @@ def test_held_out_rows_play_each_clip_on_weights_relaxed_under_the_next(dev_asse
     assert (walk.stretch_low, walk.stretch_high) == (figures["stretch_low"], figures["stretch_high"])
     assert (walk.stretch_low, walk.stretch_high) != (own.stretch_low, own.stretch_high)
     assert "next clip" in report.predictor
+
+
+def test_the_dev_toys_and_the_fox_animate_within_the_stretch_bound(dev_assets):
+    """Issue 25's bound on the rigs where it failed (the fox's waist; RiggedSimple's and SimpleSkin's coarse
+    joints, before the motion stage relaxed the weights under the clip): within STRETCH_BOUND of the artist's rig."""
+    report = evaluate_motion(dev_assets, only={"fox", "rigged_simple", "simple_skin"})
+    ours = [r for r in report.rows if r.target == "ours"]
+    assert len(ours) == 5 and all(r.error is None for r in ours)
+    assert all(r.within_bound for r in ours), [(r.name, r.clip, r.stretch_ratio) for r in ours]
