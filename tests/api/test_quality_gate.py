@@ -1,5 +1,9 @@
 """Quality gate through the API: a clip that folds elbows and knees back through themselves collapses the
-skinned mesh; the job fails with code quality_gate, or succeeds flagged with options.quality_gate "warn"."""
+skinned mesh; the job fails with code quality_gate, or succeeds flagged with options.quality_gate "warn".
+
+The weights stay the skin stage's (`motion.relax_weights: false`): relaxed under this clip they spread the folds
+until the mesh keeps its edges and volume within the artists' envelope (1st-percentile stretch 0.74 against 0.17),
+and the gate then rightly passes it."""
 
 from __future__ import annotations
 
@@ -21,7 +25,8 @@ def folding_bvh() -> bytes:
 
 
 def run_job(client, auth, dev_assets, gate: str) -> dict:
-    options = {"skeleton": "keep", "stages": ["skeleton", "skin", "motion"], "quality_gate": gate}
+    options = {"skeleton": "keep", "stages": ["skeleton", "skin", "motion"], "quality_gate": gate,
+               "motion": {"relax_weights": False}}
     r = client.post("/api/v1/jobs", headers=auth, data={"options": json.dumps(options)},
                     files={"mesh": ("rigged_figure.glb", (dev_assets / "rigged_figure.glb").read_bytes()),
                            "motion": ("fold.bvh", folding_bvh())})
