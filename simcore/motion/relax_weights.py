@@ -63,7 +63,7 @@ class Relaxation:
 
 
 def _stretch(vertices: np.ndarray, weights: sp.csr_matrix, mats: np.ndarray, e: np.ndarray,
-                 rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+             rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """((E,) worst |length / bind length − 1| of each edge over the frames, (T,) each frame's 99th percentile of it)."""
     worst = np.zeros(len(e))
     tails = []
