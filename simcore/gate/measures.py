@@ -75,21 +75,32 @@ class DeformationSeries:
     volume_ratio: np.ndarray | None
 
 
-def deformation_series(rest: np.ndarray, faces: np.ndarray, blocks: Iterable[np.ndarray]) -> DeformationSeries:
-    """Edge stretch and volume of every frame in `blocks` ((t, V, 3) arrays, in order) against `rest` (V, 3)."""
-    rest = np.asarray(rest, np.float64)
+def measured_edges(rest: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """((E, 2) edges, (E,) bind lengths) of the mesh's edges that have a stretch ratio (longer than MIN_EDGE ×
+    the model size)."""
     e = edges(faces)
     rest_len = np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)
     keep = rest_len > MIN_EDGE * model_size(rest)
-    e, rest_len = e[keep], rest_len[keep]
+    return e[keep], rest_len[keep]
+
+
+def edge_ratios(frames: np.ndarray, e: np.ndarray, rest_len: np.ndarray) -> np.ndarray:
+    """(t, E) posed / bind length of edges `e` in frames (t, V, 3)."""
+    d = frames[:, e[:, 0]] - frames[:, e[:, 1]]
+    return np.sqrt(np.einsum("tek,tek->te", d, d)) / rest_len
+
+
+def deformation_series(rest: np.ndarray, faces: np.ndarray, blocks: Iterable[np.ndarray]) -> DeformationSeries:
+    """Edge stretch and volume of every frame in `blocks` ((t, V, 3) arrays, in order) against `rest` (V, 3)."""
+    rest = np.asarray(rest, np.float64)
+    e, rest_len = measured_edges(rest, faces)
     face_parts = volume_parts(rest, faces)
     rest_volume = float(part_volumes(rest, faces, face_parts).sum())
     box = float(np.prod(np.ptp(rest, axis=0)))
     enclosed = abs(rest_volume) > MIN_ENCLOSED * box
     low, high, vol = [], [], []
     for frames in blocks:
-        d = frames[:, e[:, 0]] - frames[:, e[:, 1]]
-        ratio = np.sqrt(np.einsum("tek,tek->te", d, d)) / rest_len
+        ratio = edge_ratios(frames, e, rest_len)
         p = np.nan_to_num(np.percentile(ratio, STRETCH_PERCENTILES, axis=1), nan=np.inf)  # (2, t)
         low.append(p[0])
         high.append(p[1])

@@ -12,7 +12,7 @@ that encloses a volume, each frame's volume change past VOLUME_TOLERANCE adds it
 reads had that excess (the volume is the quality gate's). Every other vertex keeps its weights bit for bit, and so
 does any part no frame deforms. The work is on the welded surface (seam copies of a vertex keep one row, as the skin
 stage leaves them). Frames: the FRAMES / 2 with the worst edge tails and FRAMES / 2 evenly spaced over the clip; the
-loss looks at those, the figures returned at every frame. The constants' sweep is in the README (Motion section).
+loss looks at those, the edges past the tolerance are counted at every frame. The constants' sweep is in the README (Motion section).
 """
 
 from __future__ import annotations
@@ -25,14 +25,14 @@ import scipy.sparse as sp
 import torch
 
 from simcore.arrays import smallest_k
-from simcore.gate.measures import MIN_EDGE, MIN_ENCLOSED
-from simcore.geometry.laplacian import adjacency, edges
+from simcore.gate.measures import MIN_ENCLOSED, edge_ratios, lbs_blocks, measured_edges
+from simcore.geometry.laplacian import adjacency
 from simcore.geometry.weld import weld_vertices
 from simcore.mpm.measures import part_centres, part_volumes, volume_parts
 from simcore.skinning.lbs import linear_blend
 from simcore.skinning.postprocess import top_k
 
-TOLERANCE = 0.02  # |stretch − 1| an edge may reach at no cost: about what one pixel of a framed character shows
+TOLERANCE = 0.02  # |stretch − 1| an edge may reach at no cost (chosen with CLOSENESS: README, Motion section)
 VOLUME_TOLERANCE = 0.02  # |volume / bind volume − 1| a frame may reach at no cost
 CLOSENESS = 0.003  # cost of a squared weight change against a squared excess stretch of one edge in every frame
 RINGS = 2  # vertices this many edges from an offending edge may move, so a blend can widen
@@ -40,8 +40,7 @@ CANDIDATES = 8  # joints a moving vertex may share weight between: its own first
 FRAMES = 32
 STEPS = 80
 STEP_SIZE = 0.02
-BLOCK_VALUES = 4_000_000  # frames × edges measured at once
-MAX_TERMS = 2_000_000  # frames × moving vertices × candidates per step: bounds the time (~0.1 s a step) and memory
+MAX_TERMS = 2_000_000  # frames × moving vertices × candidates per step: bounds the time (≈ 0.2 s a step here) and memory
 CHUNK_ROWS = 4096  # moving vertices whose candidate positions are computed at once
 DENSE_ROWS = 32_768  # moving vertices whose rows are made dense over the joints at once
 
@@ -52,26 +51,23 @@ class Relaxation:
 
     weights: sp.csr_matrix
     vertices_moved: int
-    edges_over_before: int  # edges past the tolerance in some frame of the clip
-    edges_over_after: int
+    edges_over: int  # edges past the tolerance in some frame of the clip, before (the gate measures the result)
     mean_row_change: float  # mean L1 change of a moved vertex's row
 
     def figures(self) -> dict[str, float | int]:
-        return {"vertices_moved": self.vertices_moved, "edges_over_before": self.edges_over_before,
-                "edges_over_after": self.edges_over_after, "mean_row_change": round(self.mean_row_change, 5),
+        return {"vertices_moved": self.vertices_moved, "edges_over": self.edges_over,
+                "mean_row_change": round(self.mean_row_change, 5),
                 "tolerance": TOLERANCE}
 
 
 def _stretch(vertices: np.ndarray, weights: sp.csr_matrix, mats: np.ndarray, e: np.ndarray,
              rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """((E,) worst |length / bind length − 1| of each edge over the frames, (T,) each frame's 99th percentile of it)."""
+    """((E,) worst |length / bind length − 1| of each edge over the frames, (T,) each frame's 99th percentile of it),
+    posed as the quality gate poses a clip."""
     worst = np.zeros(len(e))
     tails = []
-    step = max(1, BLOCK_VALUES // max(len(e), 1))
-    for start in range(0, len(mats), step):
-        posed = linear_blend(vertices, weights, mats[start:start + step])  # (t, V, 3)
-        d = posed[:, e[:, 0]] - posed[:, e[:, 1]]
-        deviation = np.abs(np.sqrt(np.einsum("tek,tek->te", d, d)) / rest - 1.0)
+    for posed in lbs_blocks(vertices, weights, mats):
+        deviation = np.abs(edge_ratios(posed, e, rest) - 1.0)
         worst = np.maximum(worst, deviation.max(axis=0))
         tails.append(np.percentile(deviation, 99.0, axis=1))
     return worst, np.concatenate(tails)
@@ -130,17 +126,14 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
     v, f = welded.vertices, welded.faces
     first = np.unique(welded.index, return_index=True)[1]
     w0 = sp.csr_matrix(weights, dtype=np.float64)[first]
-    e = edges(f)
-    rest = np.linalg.norm(v[e[:, 0]] - v[e[:, 1]], axis=1)
-    keep = rest > MIN_EDGE * (float(np.ptp(v, axis=0).max()) or 1.0)
-    e, rest = e[keep], rest[keep]
+    e, rest = measured_edges(v, f)
     unchanged = sp.csr_matrix(weights, dtype=np.float32)
     if not len(e) or not len(mats):
-        return Relaxation(unchanged, 0, 0, 0, 0.0)
+        return Relaxation(unchanged, 0, 0, 0.0)
     worst, tails = _stretch(v, w0, mats, e, rest)
     over = worst > TOLERANCE
     if not over.any():
-        return Relaxation(unchanged, 0, 0, 0, 0.0)
+        return Relaxation(unchanged, 0, 0, 0.0)
     adj = adjacency(f, len(v))
     near = (adj + sp.identity(len(v), format="csr")).tocsr()
     moving = np.zeros(len(v), bool)
@@ -160,11 +153,10 @@ def relax_weights(vertices: np.ndarray, faces: np.ndarray, weights: sp.csr_matri
     place = sp.csr_matrix((np.ones(len(rows)), (rows, np.arange(len(rows)))), shape=(len(v), len(rows)))
     relaxed = sp.csr_matrix(sp.diags((~moving).astype(np.float64)) @ w0
                             + place @ _placed(ids, new, w0.shape[1], max_influences))
-    after, _ = _stretch(v, relaxed, mats, e, rest)
     change = float(np.abs((relaxed - w0)[rows]).sum(axis=1).mean())
     out = sp.csr_matrix(relaxed[welded.index], dtype=np.float32)
     out.eliminate_zeros()
-    return Relaxation(out, len(rows), int(over.sum()), int((after > TOLERANCE).sum()), change)
+    return Relaxation(out, len(rows), int(over.sum()), change)
 
 
 @dataclass

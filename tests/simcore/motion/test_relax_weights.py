@@ -60,15 +60,17 @@ def test_a_clip_that_deforms_nothing_changes_no_weight() -> None:
     vertices, faces, _ = tube(rings=11)
     weights = _step(vertices)
     out = relax_weights(vertices, faces, weights, np.tile(np.eye(4), (5, 3, 1, 1)))
-    assert out.vertices_moved == 0 and out.edges_over_before == 0
+    assert out.vertices_moved == 0 and out.edges_over == 0
     assert np.array_equal(out.weights.toarray(), weights.toarray())
 
 
 def test_a_gentle_blend_within_the_tolerance_is_left_alone() -> None:
     vertices, faces, _ = tube(rings=21)
     weights, mats = _step(vertices), _bend(degrees=0.5)
+    low, high = _tails(vertices, faces, weights, mats)
+    assert 1.0 + 1e-4 < high < 1.0 + TOLERANCE and 1.0 - TOLERANCE < low  # the edges do bend, within the tolerance
     out = relax_weights(vertices, faces, weights, mats)
-    assert out.vertices_moved == 0 and TOLERANCE > 0
+    assert out.vertices_moved == 0
     assert np.array_equal(out.weights.toarray(), weights.toarray())
 
 
