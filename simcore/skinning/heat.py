@@ -63,13 +63,13 @@ def _cone_distances(points: np.ndarray, normals: np.ndarray, heads: np.ndarray, 
     return out
 
 
-def _outward_normals(points: np.ndarray, faces: np.ndarray, label: np.ndarray) -> np.ndarray:
-    """(N, 3) vertex normals, flipped on every surface part whose faces wind inwards (negative signed volume)."""
+def _outward_normals(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(N, 3) vertex normals, all flipped when the mesh's faces wind inwards (negative signed volume about its
+    centre). Only the whole mesh is judged: the signed volume of an open part says nothing about its winding."""
     normals = trimesh.Trimesh(points, faces, process=False).vertex_normals
-    tri = points[faces]
-    signed = np.einsum("fc,fc->f", tri[:, 0], np.cross(tri[:, 1], tri[:, 2]))
-    volume = np.bincount(label[faces[:, 0]], weights=signed, minlength=int(label.max()) + 1)
-    return np.where((volume[label] < 0)[:, None], -normals, normals)
+    tri = points[faces] - points.mean(axis=0)
+    volume = float(np.einsum("fc,fc->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])))
+    return -normals if volume < 0 else normals
 
 
 def _heat_sources(grid: VoxelGrid, points: np.ndarray, label: np.ndarray, heads: np.ndarray, tails: np.ndarray,
@@ -124,7 +124,7 @@ def heat_weights(
     dist, t = closest_on_segments(wv, heads, tails)  # (n, S)
     grid = solid_voxels(wv, wf, resolution=resolution)
     _, label = connected_components(adjacency(wf, len(wv)), directed=False)
-    cone = _cone_distances(wv, _outward_normals(wv, wf, label), heads, tails, dist, t)
+    cone = _cone_distances(wv, _outward_normals(wv, wf), heads, tails, dist, t)
     p, h = _heat_sources(grid, wv, label, heads, tails, seg.owner, skeleton.num_joints, cone, t)
     progress(0.35)
 
