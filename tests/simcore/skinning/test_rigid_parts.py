@@ -92,3 +92,14 @@ def test_a_large_part_holding_one_joint_is_a_rigid_piece():
     out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints, max_size=0.35).toarray()
     assert np.allclose(out[:4], dense[:4])
     assert np.array_equal(out[4:], np.tile([1.0, 0.0, 0.0], (4, 1)))
+
+
+def test_a_piece_holding_two_joints_keeps_its_blend_however_small():
+    """A small part around two joints (a bird of a flock, wings and all) has joints to bend about: the 67.5 % its
+    method puts on one of them does not bind it, as it binds the same part holding one joint."""
+    v, f = _two_parts()
+    dense = np.tile([[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]], (2, 1))
+    joints = np.array([[0.2, 0.2, 0.2], [0.3, 0.1, 0.1], [3.2, 0.2, 0.2]])  # two in the first part, one in the second
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints, max_size=1.0).toarray()
+    assert np.allclose(out[:4], dense[:4])
+    assert np.array_equal(out[4:], np.tile([1.0, 0.0, 0.0], (4, 1)))
