@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
 from simcore.geometry.parts import part_labels
@@ -83,23 +84,15 @@ def test_rigid_pieces_are_parts_on_one_joint_alone():
     assert not rigid_piece_vertices(one, sp.csr_matrix(np.eye(3)[[1, 1, 1, 1]])).any()
 
 
-def test_a_large_part_holding_one_joint_is_a_rigid_piece():
-    """Parts half the mesh's extent: one holding a single joint (a wheel) follows the joint it leans on; one
-    holding two joints (a body) keeps its blend."""
+@pytest.mark.parametrize("max_size", [0.35, 1.0])
+def test_a_part_holding_one_joint_is_a_rigid_piece_and_one_holding_two_is_not(max_size: float):
+    """Parts half the mesh's extent, large (max_size 0.35) or pieces (1.0): one holding a single joint (a wheel)
+    follows the joint it leans on; one holding two joints (a body, or a flock's bird, wings and all) keeps its
+    blend, though it puts 67.5 % on one of them."""
     v, f = _two_parts()
     dense = np.tile([[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]], (2, 1))
     joints = np.array([[0.2, 0.2, 0.2], [0.3, 0.1, 0.1], [3.2, 0.2, 0.2]])  # two in the first part, one in the second
-    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints, max_size=0.35).toarray()
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints, max_size=max_size).toarray()
     assert np.allclose(out[:4], dense[:4])
     assert np.array_equal(out[4:], np.tile([1.0, 0.0, 0.0], (4, 1)))
 
-
-def test_a_piece_holding_two_joints_keeps_its_blend_however_small():
-    """A small part around two joints (a bird of a flock, wings and all) has joints to bend about: the 67.5 % its
-    method puts on one of them does not bind it, as it binds the same part holding one joint."""
-    v, f = _two_parts()
-    dense = np.tile([[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]], (2, 1))
-    joints = np.array([[0.2, 0.2, 0.2], [0.3, 0.1, 0.1], [3.2, 0.2, 0.2]])  # two in the first part, one in the second
-    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints, max_size=1.0).toarray()
-    assert np.allclose(out[:4], dense[:4])
-    assert np.array_equal(out[4:], np.tile([1.0, 0.0, 0.0], (4, 1)))
