@@ -5,7 +5,7 @@ Each joint's weight is the equilibrium temperature of the surface when that join
 a vertex's distance to a bone is stretched when its normal faces away from it (d / (½ (cos + 1.001)), cos between
 the outward normal and the bone-to-vertex direction), the nearest bone by that distance heats the vertex only if the
 vertex can *see* it (the straight line to it stays inside the solid voxelisation), H_ii = n_i c / d_i² for the
-n_i bones tied nearest, p_ij = 1 / n_i when joint j owns one of them, and a vertex that sees none is not
+n_i joints whose bones tie nearest, p_ij = 1 / n_i for each of them, and a vertex that sees none is not
 heated: its weights come from its neighbours'. A surface part with no heated vertex at all is heated by its
 nearest bones regardless (Blender fails there: "failed to find solution"). Results under 0.05 fade out to
 nothing at 0.025 (Blender's weight limit). Duplicate (seam, flat-shaded) vertices are welded first; otherwise
@@ -26,8 +26,9 @@ from scipy.sparse.linalg import splu
 from simcore.geometry.laplacian import adjacency, cotangent_laplacian, vertex_areas
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.geometry.weld import weld_vertices
+from simcore.mpm.measures import part_volumes, volume_parts
 from simcore.skeleton.types import Skeleton
-from simcore.skinning.bones import closest_on_segments, joint_segments
+from simcore.skinning.bones import ROWS, closest_on_segments, joint_segments
 from simcore.skinning.postprocess import normalize_rows
 
 HEAT_C = 1.0  # Baran & Popović's constant: H_ii = c / d², c = 1
@@ -35,7 +36,6 @@ TIE = 1.0001  # bones within 0.01 % of the nearest are heated together (Pinocchi
 LINE_SAMPLES = 12  # voxel samples along the vertex-to-bone line
 MIN_DISTANCE = 1e-4  # unit-cube floor of the heating distance
 LIMIT_START, LIMIT_END = 0.05, 0.025  # weights under START fade linearly to 0 at END (Blender's weight limit)
-ROWS = 8192  # vertices per block of the cone distances
 
 
 def _visible(grid: VoxelGrid, start: np.ndarray, end: np.ndarray) -> np.ndarray:
@@ -64,12 +64,10 @@ def _cone_distances(points: np.ndarray, normals: np.ndarray, heads: np.ndarray, 
 
 
 def _outward_normals(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(N, 3) vertex normals, all flipped when the mesh's faces wind inwards (negative signed volume about its
-    centre). Only the whole mesh is judged: the signed volume of an open part says nothing about its winding."""
+    """(N, 3) vertex normals, all flipped when the mesh's faces wind inwards: its signed volume, the quality gate's
+    (each part's cones from its own centre), is negative. The whole mesh is judged: an open part says nothing."""
     normals = trimesh.Trimesh(points, faces, process=False).vertex_normals
-    tri = points[faces] - points.mean(axis=0)
-    volume = float(np.einsum("fc,fc->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])))
-    return -normals if volume < 0 else normals
+    return -normals if float(part_volumes(points, faces, volume_parts(points, faces)).sum()) < 0 else normals
 
 
 def _heat_sources(grid: VoxelGrid, points: np.ndarray, label: np.ndarray, heads: np.ndarray, tails: np.ndarray,
@@ -86,11 +84,10 @@ def _heat_sources(grid: VoxelGrid, points: np.ndarray, label: np.ndarray, heads:
     cold = ~np.isin(label, label[heated])  # a part nothing heats: its nearest bones heat it, seen or not
     seen |= cold[rows]
     p = np.zeros((n, joints))
-    np.add.at(p, (rows[seen], owner[segs[seen]]), 1.0)
-    count = np.bincount(rows[seen], minlength=n).astype(np.float64)
-    p = normalize_rows(np.minimum(p, 1.0))
-    h = np.where(count > 0, count * HEAT_C / np.maximum(nearest, MIN_DISTANCE) ** 2, 0.0)
-    return p, h
+    p[rows[seen], owner[segs[seen]]] = 1.0  # a joint whose two segments tie heats once
+    count = p.sum(axis=1)
+    h = count * HEAT_C / np.maximum(nearest, MIN_DISTANCE) ** 2
+    return normalize_rows(p), h
 
 
 def _limited(w: np.ndarray) -> np.ndarray:

@@ -8,9 +8,8 @@ however its weight is spread (with no joint to bend about, a piece that blends b
 head and neck, can only stretch), and a part holding one joint is bound to that joint when at least RIGID_SHARE
 of its weight mass lies on one joint (a wheel, a cart, a shield). A part holding two joints or more keeps the
 method's blend, whatever its size: `rigforge eval parts ../shared/corpus --split train` counts how artists bind
-each class, and such parts are rigid in only 30 % (pieces) and 8 % (large parts) of the artists' rigs. Without
-joint positions, parts up to MAX_PIECE of the whole mesh that lean on one joint are bound. A mesh of one piece is
-left as it is.
+each class (pieces: box diagonal up to MAX_PIECE of the whole mesh's), and such parts are rigid in only 30 %
+(pieces) and 8 % (large parts) of the artists' rigs. A mesh of one piece is left as it is.
 """
 
 from __future__ import annotations
@@ -52,12 +51,11 @@ def part_figures(vertices: np.ndarray, labels: np.ndarray, weights: sp.spmatrix,
     return PartFigures(mass, np.linalg.norm(hi - lo, axis=1) / (whole or 1.0), held)
 
 
-def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_matrix, joints: np.ndarray | None = None,
-                     share: float = RIGID_SHARE, max_size: float = MAX_PIECE) -> sp.csr_matrix:
+def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_matrix, joints: np.ndarray,
+                     share: float = RIGID_SHARE) -> sp.csr_matrix:
     """(V, J) CSR `weights` with every part that holds none of `joints` (J', 3) in its box, or holds one and puts
-    at least `share` of its weight mass on one joint, bound to that joint alone; without `joints`, every part up to
-    `max_size` of the mesh that leans so (see the module docstring). vertices (V, 3): the mesh the weights are
-    for; labels (V,) int: its `part_labels`."""
+    at least `share` of its weight mass on one joint, bound to that joint alone (see the module docstring).
+    vertices (V, 3): the mesh the weights are for; labels (V,) int: its `part_labels`."""
     count = int(labels.max()) + 1 if len(labels) else 0
     if count < 2:
         return weights
@@ -65,11 +63,9 @@ def bind_rigid_parts(vertices: np.ndarray, labels: np.ndarray, weights: sp.csr_m
     fig = part_figures(vertices, labels, w, joints)
     total = fig.mass.sum(axis=1)
     top = fig.mass.argmax(axis=1)
+    held = fig.held if fig.held is not None else np.zeros(count, np.int64)  # no joint given: none is held
     leaning = fig.mass[np.arange(count), top] >= share * total
-    if fig.held is None:
-        rigid = (total > 0) & leaning & (fig.size <= max_size)
-    else:
-        rigid = (total > 0) & ((fig.held == 0) | ((fig.held == 1) & leaning))
+    rigid = (total > 0) & ((held == 0) | ((held == 1) & leaning))
     rows = np.flatnonzero(rigid[labels])
     if not len(rows):
         return w

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 import scipy.sparse as sp
 
 from simcore.geometry.parts import part_labels
@@ -26,12 +25,15 @@ def test_parts_are_welded_components():
     assert len(set(labels[:4])) == 1 and len(set(labels[4:8])) == 1 and labels[0] != labels[4] and labels[8] == labels[0]
 
 
-def test_a_part_mostly_on_one_joint_follows_it_alone():
+ONE_JOINT_EACH = np.array([[0.2, 0.2, 0.2], [3.2, 0.2, 0.2], [-1.0, 0.0, 0.0]])  # one in each part, one outside
+
+
+def test_a_part_holding_one_joint_and_mostly_on_one_joint_follows_it_alone():
     v, f = _two_parts()
     dense = np.zeros((8, 3))
     dense[:4] = [[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]]  # 67.5 % on joint 0
     dense[4:] = [[0.4, 0.3, 0.3], [0.2, 0.4, 0.4], [0.3, 0.3, 0.4], [0.4, 0.3, 0.3]]  # at most 35 % on one joint
-    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), max_size=1.0).toarray()
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), ONE_JOINT_EACH).toarray()
     assert np.array_equal(out[:4], np.tile([1.0, 0.0, 0.0], (4, 1)))
     assert np.allclose(out[4:], dense[4:])
     assert np.allclose(out.sum(axis=1), 1.0)
@@ -39,18 +41,8 @@ def test_a_part_mostly_on_one_joint_follows_it_alone():
 
 def test_a_one_piece_mesh_keeps_its_weights():
     dense = np.array([[0.9, 0.1], [0.8, 0.2], [0.7, 0.3], [0.9, 0.1]])
-    out = bind_rigid_parts(TETRA, part_labels(TETRA, TETRA_FACES), sp.csr_matrix(dense))
+    out = bind_rigid_parts(TETRA, part_labels(TETRA, TETRA_FACES), sp.csr_matrix(dense), np.zeros((0, 3)))
     assert np.allclose(out.toarray(), dense)
-
-
-def test_a_part_as_large_as_the_body_keeps_its_blend():
-    """Two equal parts, each half the mesh's extent: bodies, not pieces, so a 67.5 % share does not bind them."""
-    v, f = _two_parts()
-    dense = np.tile([[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]], (2, 1))
-    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), max_size=0.35).toarray()
-    assert np.allclose(out, dense)
-    small = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), max_size=0.8).toarray()
-    assert np.array_equal(small[:4], np.tile([1.0, 0.0, 0.0], (4, 1)))
 
 
 def test_a_spread_part_with_no_joint_inside_follows_its_main_joint():
@@ -61,11 +53,11 @@ def test_a_spread_part_with_no_joint_inside_follows_its_main_joint():
     dense[:4] = [[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]]
     dense[4:] = [[0.4, 0.3, 0.3], [0.2, 0.4, 0.4], [0.3, 0.3, 0.4], [0.4, 0.3, 0.3]]  # joint 2 has the most mass
     outside = np.array([[0.2, 0.2, 0.2], [-1.0, 0.0, 0.0], [-2.0, 0.0, 0.0]])  # all three in or beyond the first part
-    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), outside, max_size=1.0).toarray()
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), outside).toarray()
     assert np.array_equal(out[4:], np.tile([0.0, 0.0, 1.0], (4, 1)))
     inside = outside.copy()
     inside[2] = [3.2, 0.2, 0.2]  # a joint inside the second part's box
-    kept = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), inside, max_size=1.0).toarray()
+    kept = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), inside).toarray()
     assert np.allclose(kept[4:], dense[4:])
 
 
@@ -84,15 +76,14 @@ def test_rigid_pieces_are_parts_on_one_joint_alone():
     assert not rigid_piece_vertices(one, sp.csr_matrix(np.eye(3)[[1, 1, 1, 1]])).any()
 
 
-@pytest.mark.parametrize("max_size", [0.35, 1.0])
-def test_a_part_holding_one_joint_is_a_rigid_piece_and_one_holding_two_is_not(max_size: float):
-    """Parts half the mesh's extent, large (max_size 0.35) or pieces (1.0): one holding a single joint (a wheel)
-    follows the joint it leans on; one holding two joints (a body, or a flock's bird, wings and all) keeps its
-    blend, though it puts 67.5 % on one of them."""
+def test_a_part_holding_two_joints_keeps_its_blend():
+    """Parts half the mesh's extent (their size decides nothing): one holding a single joint (a wheel) follows the
+    joint it leans on; one holding two joints (a body, or a flock's bird, wings and all) keeps its blend, though it
+    puts 67.5 % on one of them."""
     v, f = _two_parts()
     dense = np.tile([[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0], [0.7, 0.3, 0.0]], (2, 1))
     joints = np.array([[0.2, 0.2, 0.2], [0.3, 0.1, 0.1], [3.2, 0.2, 0.2]])  # two in the first part, one in the second
-    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints, max_size=max_size).toarray()
+    out = bind_rigid_parts(v, part_labels(v, f), sp.csr_matrix(dense), joints).toarray()
     assert np.allclose(out[:4], dense[:4])
     assert np.array_equal(out[4:], np.tile([1.0, 0.0, 0.0], (4, 1)))
 
