@@ -9,6 +9,11 @@ paper's settings (e.g. --grid 100 --substeps 100 --material-iters 20 --velocity-
 on a GPU). Ablations: --no-learn-mixing, --material-iters 0 (no material phase), --drivers virtual,
 --drive velocity (the paper's open-loop integrated velocities instead of driving points aimed at per-frame anchors),
 --initial-motion (particles start with their joints' motion; off by default).
+Where the error comes from: `--breakdown 32,64,96` runs, at each grid (particles and substeps scaled to keep their
+density and length in cells), forward runs told more and more of the answer (`simcore.mpm.fit_breakdown`);
+`--protocol none` skips the fits:
+
+    rigforge fit ../shared/assets/dev/meshseq_horse.glb ../shared/assets/dev/meshseq_flamingo.glb --protocol none --breakdown 32,64,96
 
     rigforge fit ../shared/assets/dev/meshseq_horse.glb ../shared/assets/dev/meshseq_flamingo.glb --json out.json
 """
@@ -34,11 +39,29 @@ def _table(title: str, row: dict) -> Table:
     return table
 
 
+BREAKDOWN_ROWS = {
+    "observed": "every particle driven along the observed motion (the solver's floor)",
+    "anchor_motion": "every particle driven by its joints' rigid motions (all the drivers know)",
+    "drivers": "the fit's driving points, the material carries the rest (physics before fitting)",
+    "lbs_motion": "LBS: coarse weights and the same rigid motions, no optimiser step",
+}
+
+
+def _breakdown_table(title: str, runs: list[dict]) -> Table:
+    table = Table(title=title)
+    table.add_column("forward run")
+    for run in runs:
+        table.add_column(f"grid {run['grid']} ({run['particles']} p)", justify="right")
+    for key, label in BREAKDOWN_ROWS.items():
+        table.add_row(label, *(f"{run['rows'][key]['mean']:.4f}" for run in runs))
+    return table
+
+
 def fit(
     sequences: Annotated[list[Path], typer.Argument(help="glTF/GLB files with a morph-target animation (deforming mesh, no skin)")],
     frames: Annotated[int, typer.Option(help="frames to fit from the clip start (0: all)")] = 0,
     fps: Annotated[float, typer.Option(help="sampling rate of the sequence (the paper: 25)")] = 25.0,
-    protocol: Annotated[str, typer.Option(help="pure, train_test or both")] = "both",
+    protocol: Annotated[str, typer.Option(help="pure, train_test, both or none")] = "both",
     train_fraction: Annotated[float, typer.Option(help="train/test: share of the frames fitted first")] = 0.5,
     grid: Annotated[int, typer.Option(help="grid nodes per axis")] = 32,
     substeps: Annotated[int, typer.Option(help="substeps per frame")] = 25,
@@ -53,6 +76,7 @@ def fit(
     material_iters: Annotated[int, typer.Option(help="AdamW steps per material phase (paper: 20)")] = 5,
     velocity_iters: Annotated[int, typer.Option(help="SGD steps per frame per velocity phase (paper: 30)")] = 5,
     velocity_lr: Annotated[float, typer.Option(help="SGD learning rate, velocities in cells/frame; materials get 20×")] = 0.01,
+    breakdown: Annotated[str, typer.Option(help="grids for the error breakdown, comma-separated (empty: none)")] = "",
     synthetic: Annotated[bool, typer.Option(help="also run the synthetic material-recovery case")] = False,
     device: Annotated[str | None, typer.Option(help="warp device (default: CUDA when present)")] = None,
     json_out: Annotated[Path | None, typer.Option("--json", help="write the results here")] = None,
@@ -65,8 +89,14 @@ def fit(
     from simcore.mpm.fit import FitConfig
     from simcore.mpm.fit_experiment import fit_sequence, recover_materials
 
-    if protocol not in ("pure", "train_test", "both"):
-        raise typer.BadParameter("pure, train_test or both", param_hint="--protocol")
+    if protocol not in ("pure", "train_test", "both", "none"):
+        raise typer.BadParameter("pure, train_test, both or none", param_hint="--protocol")
+    try:
+        grids = tuple(int(g) for g in breakdown.split(",") if g.strip())
+    except ValueError:
+        raise typer.BadParameter("comma-separated grid sizes, e.g. 32,64", param_hint="--breakdown") from None
+    if any(g < 16 for g in grids):
+        raise typer.BadParameter("grids of 16 nodes or more", param_hint="--breakdown")
     if drivers not in ("skeleton", "virtual"):
         raise typer.BadParameter("skeleton or virtual", param_hint="--drivers")
     if drive not in ("anchored", "velocity"):
@@ -77,13 +107,16 @@ def fit(
                        virtual_joints=joints, max_joints=joints, cycles=cycles, material_iters=material_iters,
                        velocity_iters=velocity_iters, velocity_lr=velocity_lr, device=device, drivers=drivers,
                        learn_mixing=learn_mixing, drive=drive, initial_motion=initial_motion)
-    protocols = ("pure", "train_test") if protocol == "both" else (protocol,)
+    protocols: tuple[str, ...] = {"both": ("pure", "train_test"), "none": ()}.get(protocol, (protocol,))
     result: dict = {}
     for path in sequences:
         seq = read_morph_sequence(GltfDocument.from_bytes(path.read_bytes()), fps=fps, max_frames=frames or None)
         console.print(f"{path.name}: {seq.frames.shape[1]} vertices, {len(seq.frames)} frames at {seq.fps:g} fps")
-        r = fit_sequence(seq.frames, seq.faces, seq.fps, config, train_fraction, protocols, log=console.print)
+        r = fit_sequence(seq.frames, seq.faces, seq.fps, config, train_fraction, protocols, log=console.print,
+                         breakdown_grids=grids)
         result[path.stem] = r
+        if grids:
+            console.print(_breakdown_table(f"{path.stem}: where the error comes from, chamfer ×100 ({r['units']})", r["breakdown"]))
         for name in protocols:
             console.print(_table(f"{path.stem}, {name}: chamfer per frame ({r['units']})", r[name]))
         if json_out:  # after each sequence, so a long run leaves what it finished

@@ -11,6 +11,7 @@ import numpy as np
 import trimesh
 
 from simcore.mpm.fit import FitConfig, FitScene, PhysicsFit, driver_path, fit_physics, per_frame_chamfer, prepare_scene
+from simcore.mpm.fit_breakdown import error_breakdown, scaled_config
 from simcore.mpm.lbs_fit import fit_lbs
 
 
@@ -73,9 +74,19 @@ def train_test(scene: FitScene, config: FitConfig, train_frames: int, log: Calla
 
 
 def fit_sequence(frames: np.ndarray, faces: np.ndarray, fps: float, config: FitConfig, train_fraction: float = 0.5,
-                 protocols: tuple[str, ...] = ("pure", "train_test"), log: Callable[[str], None] = lambda s: None) -> dict[str, Any]:
-    """Physics vs the LBS baseline on frames (T, V, 3) in each protocol; chamfer ×100 in units of the frame-0 size."""
+                 protocols: tuple[str, ...] = ("pure", "train_test"), log: Callable[[str], None] = lambda s: None,
+                 breakdown_grids: tuple[int, ...] = ()) -> dict[str, Any]:
+    """Physics vs the LBS baseline on frames (T, V, 3) in each protocol, and the error breakdown
+    (`fit_breakdown`) at each of breakdown_grids (config scaled to it); chamfer ×100 in units of the frame-0 size."""
     targets, _ = normalise(np.asarray(frames, np.float64))
+    breakdown = []
+    for grid in breakdown_grids:
+        scaled = scaled_config(config, grid)
+        breakdown.append(error_breakdown(prepare_scene(targets, faces, fps, scaled), scaled))
+        log(f"breakdown at grid {grid}: " + ", ".join(f"{k} {v['mean']:.4f}" for k, v in breakdown[-1]["rows"].items()))
+    if not protocols:
+        return {"frames": len(targets), "fps": fps, "units": "chamfer ×100, mesh scaled to longest side 1",
+                "config": dataclasses.asdict(config), "breakdown": breakdown}
     scene = prepare_scene(targets, faces, fps, config)
     log(f"{len(scene.x0)} particles, grid {scene.grid}, dx {scene.dx:.4f}, {len(scene.drivers0)} driving points "
         f"({config.drivers}, {len(scene.joints) if scene.joints is not None else 0} joints), "
@@ -87,6 +98,8 @@ def fit_sequence(frames: np.ndarray, faces: np.ndarray, fps: float, config: FitC
         "substeps": scene.substeps, "prototypes": scene.protos.count, "driving_points": int(len(scene.drivers0)),
         "config": dataclasses.asdict(config), "units": "chamfer ×100, mesh scaled to longest side 1",
     }
+    if breakdown:
+        out["breakdown"] = breakdown
     if "pure" in protocols:
         out["pure"] = pure_fit(scene, config, log)
     if "train_test" in protocols:
