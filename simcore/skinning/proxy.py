@@ -27,11 +27,12 @@ def simplified(vertices: np.ndarray, faces: np.ndarray, target: int | None = Non
     return np.asarray(v, np.float64), np.asarray(f, np.int64)
 
 
-def transfer(weights: sp.csr_matrix, proxy: np.ndarray, vertices: np.ndarray, max_influences: int) -> sp.csr_matrix:
+def transfer(weights: sp.csr_matrix, proxy: np.ndarray, vertices: np.ndarray, max_influences: int,
+             neighbours: int = NEIGHBOURS) -> sp.csr_matrix:
     """(V, J) float32 CSR weights of `vertices` from the proxy's (P, J) weights: inverse-distance blend of the
-    nearest proxy vertices, then the `max_influences` largest kept."""
+    `neighbours` nearest proxy vertices, then the `max_influences` largest kept."""
     tree = cKDTree(proxy)
-    k = min(NEIGHBOURS, len(proxy))
+    k = min(neighbours, len(proxy))
     blocks = []
     for start in range(0, len(vertices), CHUNK):
         dist, idx = tree.query(vertices[start:start + CHUNK], k=k)

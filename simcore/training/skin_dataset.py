@@ -31,6 +31,7 @@ class DataConfig:
     val_vertices: int = 4000
     pose_degrees: float = 35.0
     reroot: float = 0.0  # chance that a variant loses its armature root (skin_samples.rerooted)
+    decimate: float = 0.0  # chance that a variant that is not subdivided is decimated (skin_samples.decimated)
     helpers: bool = False  # joints a character's weights never use own no bone, as in a job keeping a rig (make_sample)
     seed: int = 0
 
@@ -43,7 +44,7 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
 
     def posed(count: int) -> Make:
         def make(c: Character, rng: np.random.Generator) -> list[dict[str, np.ndarray]]:
-            augmented = variants(c, rng, count, config.pose_degrees, reroot=config.reroot)
+            augmented = variants(c, rng, count, config.pose_degrees, reroot=config.reroot, decimate=config.decimate)
             return [make_sample(v, rng, config.vertices, helpers=config.helpers).arrays() for v in augmented]
         return make
 

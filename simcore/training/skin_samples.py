@@ -3,8 +3,9 @@ and targets.
 
 Augmentations (UniRig's): the character re-posed by one of its own clips' frames or by random bone
 rotations (vertices skinned with the artist's weights, joints moved with their bones, so the posed shape is a
-new character with the same weights), a random turn about the up axis and a random scale, and mid-edge
-subdivision (a denser mesh with interpolated weights) so the model cannot key on vertex density. Every
+new character with the same weights), a random turn about the up axis and a random scale, mid-edge
+subdivision (a denser mesh with interpolated weights) and quadric decimation (a coarser mesh, re-triangulated,
+weights carried from the nearest original vertices) so the model cannot key on vertex density or order. Every
 sample keeps at most `vertices` randomly chosen vertices (features are computed on the whole mesh first).
 
 A sample's targets: the artist weights on each vertex's candidate joints, the mass that falls outside them,
@@ -26,8 +27,11 @@ from simcore.skeleton.kinematics import global_transforms, random_pose_locals, s
 from simcore.skeleton.types import Skeleton, parents_first_order
 from simcore.skinning.lbs import linear_blend
 from simcore.skinning.pair_features import SkinInputs, skin_inputs
+from simcore.skinning.proxy import simplified, transfer
 
 LOSS_POSES = 2
+DECIMATE_MIN = 1000  # vertices a mesh needs before a variant may be decimated
+DECIMATE_SHARE = (0.3, 0.7)  # share of the vertices a decimated variant keeps, drawn uniformly
 
 
 @dataclass
@@ -134,6 +138,15 @@ def subdivided(character: Character) -> Character:
     return Character(character.name, character.category, vertices, faces, character.skeleton, weights)
 
 
+def decimated(character: Character, rng: np.random.Generator) -> Character:
+    """Quadric decimation (`proxy.simplified`) to a random share (DECIMATE_SHARE) of the vertices; each new vertex
+    takes the weights of its nearest original vertex (`proxy.transfer`), as sharp as the artist's."""
+    share = rng.uniform(*DECIMATE_SHARE)
+    vertices, faces = simplified(character.vertices, character.faces, int(share * len(character.vertices)))
+    weights = transfer(character.weights.tocsr(), character.vertices, vertices, character.weights.shape[1], neighbours=1)
+    return Character(character.name, character.category, vertices, faces, character.skeleton, weights, character.clips)
+
+
 @dataclass
 class SkinSample:
     """Model inputs for a subset of a character's vertices, with targets (see the module docstring)."""
@@ -181,11 +194,13 @@ def make_sample(character: Character, rng: np.random.Generator, vertices: int, *
 
 
 def variants(character: Character, rng: np.random.Generator, count: int, pose_degrees: float, *, turn: bool = True,
-             reroot: float = 0.0) -> list[Character]:
+             reroot: float = 0.0, decimate: float = 0.0) -> list[Character]:
     """`count` augmented copies: the bind pose first, then clip frames (when it has clips) and random poses in
     turn, every other one subdivided when the mesh is small; each turned and scaled at random unless `turn` is
     False (the skeleton model turns its own, less: its inputs keep the upload's facing). With `reroot` > 0, each
-    copy after the first loses its armature root (`rerooted`) with that chance."""
+    copy after the first loses its armature root (`rerooted`) with that chance; with `decimate` > 0, each copy
+    after the first that is not subdivided is decimated (`decimated`) with that chance when it has DECIMATE_MIN
+    vertices or more."""
     normal = normalised(character)
     out = []
     for k in range(count):
@@ -198,5 +213,7 @@ def variants(character: Character, rng: np.random.Generator, count: int, pose_de
                 c = reposed(base, random_pose(base, rng, pose_degrees))
         if k % 2 == 0 and k > 0 and len(c.vertices) < 20_000:
             c = subdivided(c)
+        elif k > 0 and decimate > 0 and len(c.vertices) >= DECIMATE_MIN and rng.uniform() < decimate:
+            c = decimated(c, rng)
         out.append(turned(c, rng) if turn else c)
     return out

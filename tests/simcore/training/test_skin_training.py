@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import torch
+from scipy.spatial import cKDTree
 
 from simcore.model_weights import ModelUnavailable, save_weights
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.skinning.learned import learned_weights, load_model, with_armature_root
 from simcore.training.sample_cache import save_sample
-from simcore.training.skin_samples import Character, make_sample, normalised, rerooted, variants
+from simcore.training.skin_samples import Character, decimated, make_sample, normalised, rerooted, subdivided, variants
 from simcore.training.skin_train import TrainConfig, batch_losses, sample_tensors, train_skin
 from tests.simcore.training.creatures import capsule_dog
 
@@ -80,6 +81,24 @@ def test_rerooted_takes_out_unweighted_armature_roots(depth: int) -> None:
 def test_rerooted_keeps_a_weighted_root() -> None:
     dog = normalised(capsule_dog())
     assert rerooted(dog) is dog
+
+
+def test_a_decimated_variant_is_coarser_and_keeps_its_nearest_vertex_artist_rows() -> None:
+    dog = subdivided(normalised(capsule_dog()))
+    out = decimated(dog, np.random.default_rng(0))
+    assert len(out.vertices) < 0.75 * len(dog.vertices) and out.faces.max() < len(out.vertices)
+    nearest = cKDTree(dog.vertices).query(out.vertices)[1]
+    np.testing.assert_allclose(out.weights.toarray(), dog.weights[nearest].toarray(), atol=1e-6)
+    assert out.skeleton is dog.skeleton
+
+
+def test_variants_are_decimated_only_when_asked() -> None:
+    dog = subdivided(normalised(capsule_dog()))
+    plain = variants(dog, np.random.default_rng(0), 4, 30.0)
+    coarse = variants(dog, np.random.default_rng(0), 4, 30.0, decimate=1.0)
+    assert [len(plain[k].vertices) for k in (0, 1, 3)] == [len(dog.vertices)] * 3
+    assert len(coarse[1].vertices) < len(dog.vertices) and len(coarse[3].vertices) < len(dog.vertices)
+    assert len(coarse[0].vertices) == len(dog.vertices) and len(coarse[2].vertices) > len(dog.vertices)
 
 
 def test_batched_losses_are_the_mean_of_per_sample_losses() -> None:
