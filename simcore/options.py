@@ -71,6 +71,10 @@ class JobOptions(_Strict):
                             "(what auto does for a sequence); sequence_bones sets its bone count",
     )
     max_joints: int = Field(64, ge=2, le=256, description="the most joints a predicted skeleton may have")
+    root_joint: Literal["origin", "none"] = Field(
+        "origin", description="origin: a predicted skeleton hangs from a root joint at the file's origin (the "
+                              "character's pivot, where game rigs carry root motion; it takes no weight), when the "
+                              "origin lies near the model; none: the body's own centre joint is the root")
     sequence_bones: int | None = Field(
         None, ge=2, le=256, description="mesh sequences: the bone count to fit instead of a chosen one (at most "
                                         "max_joints), and the most joints the rig gets: bones that move alike merge, "

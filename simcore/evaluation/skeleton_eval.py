@@ -179,8 +179,13 @@ def scores_of(case: EvalCase, skeleton: Skeleton) -> SkeletonScores:
     return graph_scores(skeleton.positions, skeleton.bones(), case.gt, case.mesh.vertices, case.mesh.faces, grid=case.grid)
 
 
-def _candidate_rows(name: str, category: str, case: EvalCase, prediction: SkeletonPrediction) -> list[AssetResult]:
-    """One row per method of CANDIDATE_METHODS from auto's candidates: the skeleton that method gives alone."""
+def _candidate_rows(name: str, category: str, case: EvalCase, prediction: SkeletonPrediction,
+                    max_joints: int) -> list[AssetResult]:
+    """One row per method of CANDIDATE_METHODS from auto's candidates: the skeleton that method gives alone (under
+    the root a job adds, `stage.job_root`)."""
+    from simcore.options import JobOptions
+    from simcore.skeleton.stage import job_root
+
     pool = prediction.candidates
     rows = []
     for method in CANDIDATE_METHODS:
@@ -188,7 +193,8 @@ def _candidate_rows(name: str, category: str, case: EvalCase, prediction: Skelet
         if not members:
             rows.append(AssetResult(name, category, method, None, 0.0, note="n/a: no biped fitted"))
             continue
-        rows.append(AssetResult(name, category, method, scores_of(case, pool[members[0]].skeleton), pool[members[0]].seconds))
+        skeleton = job_root(pool[members[0]].skeleton, case.mesh, case.ground, JobOptions(skeleton=method, max_joints=max_joints))[0]
+        rows.append(AssetResult(name, category, method, scores_of(case, skeleton), pool[members[0]].seconds))
     return rows
 
 
@@ -215,7 +221,7 @@ def evaluate_asset(name: str, category: str, case: EvalCase, methods: list[str],
             note = f"chose {prediction.method}" if method == "auto" else None
             rows.append(AssetResult(name, category, method, scores_of(case, prediction.skeleton), seconds, note=note))
             if method == "auto" and candidate_rows:
-                rows += _candidate_rows(name, category, case, prediction)
+                rows += _candidate_rows(name, category, case, prediction, max_joints)
         except Exception as exc:  # one failing method must not hide the other rows; the error is reported
             rows.append(AssetResult(name, category, method, None, time.perf_counter() - started, error=problem(exc)[:200]))
     return rows

@@ -33,10 +33,10 @@ def flesh_shares(target_weights: sp.spmatrix, source_weights: sp.spmatrix) -> np
 
 
 def _region_cost(source: Skeleton, target: Skeleton, shares: np.ndarray | None = None) -> np.ndarray:
-    """(Jt, Js) mean distance from points along each target joint's bones to each source joint's bones, plus
-    TIE_BREAK × the mean distance to the middles of those bones. With `shares` (`flesh_shares`), a source joint
-    moving under SHARE_OF_BEST as much of the target joint's flesh as the source joint moving most costs more than
-    any other (ruled out wherever another is allowed; a target joint that moves no flesh keeps every source joint).
+    """(Jt, Js) mean distance from points along each target joint's bones (a joint that owns none: its position) to
+    each source joint's bones, plus TIE_BREAK × the mean distance to the middles of those bones. With `shares`
+    (`flesh_shares`), a source joint moving under SHARE_OF_BEST as much of the target joint's flesh as the source
+    joint moving most costs more than any other (ruled out wherever another is allowed; a target joint that moves no flesh keeps every source joint).
 
     A target bone whose points all lie nearest a source joint's head is exactly as near the source bone ending
     there as the one starting there; which one wins would then follow rounding. The middles' term decides such
@@ -46,6 +46,8 @@ def _region_cost(source: Skeleton, target: Skeleton, shares: np.ndarray | None =
     fractions = np.asarray(SAMPLES)[:, None, None]
     points = (seg.heads[None] + fractions * (seg.tails - seg.heads)[None]).reshape(-1, 3)
     owner = np.tile(seg.owner, len(SAMPLES))
+    boneless = np.setdiff1d(np.arange(target.num_joints), seg.owner)  # helpers (JointKind.HELPER): their position
+    points, owner = np.concatenate([points, target.positions[boneless]]), np.concatenate([owner, boneless])
     bones = joint_segments(source)
     middles = 0.5 * (bones.heads + bones.tails)
     dist = joint_distances(points, bones, source.num_joints)  # (P, Js)

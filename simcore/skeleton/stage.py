@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -24,6 +25,7 @@ from simcore.errors import InvalidInput, SimcoreError
 from simcore.geometry.ground import ground_faces
 from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.skeleton.coverage import unreached_parts
+from simcore.skeleton.origin_root import origin_root
 from simcore.skeleton.predict import SkeletonPrediction, predict_skeleton
 from simcore.skeleton.types import Skeleton
 
@@ -68,12 +70,23 @@ def _given_skeleton(state: PipelineState, path: Path, vertices: np.ndarray) -> S
 def predict_for_job(mesh: IngestedMesh, options: JobOptions, ground: np.ndarray,
                     geometric_params: GeometricParams | None = None) -> SkeletonPrediction:
     """The skeleton a job predicts for an ingested mesh with `options` (skeleton method, max_joints, axes), the
-    ground-plane triangles `ground` (F,) bool left out. `rigforge eval skeleton` calls this too, so its figures are
-    what a job gives. geometric_params: the geometric method's tuning (None = the defaults; the ablation changes it)."""
-    return predict_skeleton(
+    ground-plane triangles `ground` (F,) bool left out, under a root at the file's origin (`origin_root`) unless
+    options.root_joint is "none". `rigforge eval skeleton` calls this too, so its figures are what a job gives.
+    geometric_params: the geometric method's tuning (None = the defaults; the ablation changes it)."""
+    prediction = predict_skeleton(
         mesh.vertices, mesh.faces[~ground], method=options.skeleton, max_joints=options.max_joints,
         up_axis="y" if options.up_axis else None, forward_axis=options.forward_axis, geometric_params=geometric_params,
     )
+    skeleton, why = job_root(prediction.skeleton, mesh, ground, options)
+    return prediction if why is None else replace(prediction, skeleton=skeleton, report={**prediction.report, "origin_root": why})
+
+
+def job_root(skeleton: Skeleton, mesh: IngestedMesh, ground: np.ndarray, options: JobOptions) -> tuple[Skeleton, str | None]:
+    """A predicted `skeleton` under the root options.root_joint asks for (`origin_root`: at the file's origin, judged
+    against the mesh without its ground plane), and why it was or was not added (None for root_joint "none")."""
+    if options.root_joint == "none":
+        return skeleton, None
+    return origin_root(skeleton, mesh.vertices[unique_ints(mesh.faces[~ground])], options.max_joints)
 
 
 def mesh_ground(mesh: IngestedMesh) -> tuple[list[SurfacePart], np.ndarray]:

@@ -19,6 +19,7 @@ import numpy as np
 from simcore.errors import InvalidInput
 from simcore.io.gltf_rig import root_holds_weight, weightless_joints
 from simcore.metrics.skinning import weight_stats
+from simcore.skeleton.types import JointKind
 from simcore.skinning.postprocess import bind_to_joint
 from simcore.skinning.predict import compute_weights
 
@@ -86,11 +87,13 @@ def _kept_rig(state: PipelineState) -> RiggedAsset | None:
 
 
 def _root_deforms(state: PipelineState) -> bool:
-    """Whether the skeleton's root bends the mesh: a predicted skeleton's does; a kept rig's does when the upload's
+    """Whether the skeleton's root bends the mesh: a predicted skeleton's does unless it hangs from a helper root at
+    the file's origin (`skeleton.origin_root`); a kept rig's does when the upload's
     own weights put more than a trace on it (a toy rig's first bone, a Mixamo Hips root), not when it is an armature
     root (most artist rigs; a skeleton file without weights is taken as one)."""
     if state.options.skeleton != "keep":
-        return True
+        assert state.skeleton is not None, "run() checked it"
+        return state.skeleton.kinds[0] != JointKind.HELPER  # a root at the file's origin is an armature root
     rig = _kept_rig(state)
     return rig is not None and root_holds_weight(rig.weights)
 
