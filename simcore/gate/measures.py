@@ -16,7 +16,7 @@ from simcore.geometry.laplacian import edges
 from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, solid_voxels
 from simcore.metrics.skinning import weight_stats
 from simcore.mpm.measures import part_volumes, volume_parts
-from simcore.skeleton.types import Skeleton
+from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
 from simcore.skinning.lbs import linear_blend
 
@@ -46,15 +46,18 @@ def weight_figures(weights: sp.csr_matrix, referenced: np.ndarray) -> dict[str, 
 
 
 def skeleton_figures(skeleton: Skeleton, vertices: np.ndarray, faces: np.ndarray) -> dict[str, float]:
-    """Share of joints inside the mesh's solid and share of bones shorter than ZERO_BONE × the model size.
+    """Share of joints inside the mesh's solid and share of bones shorter than ZERO_BONE × the model size. Helper
+    joints (JointKind.HELPER: a root at the file's origin, a kept rig's controls) deform nothing and are not counted
+    in the inside share.
 
     vertices (V, 3), faces (F, 3): the bind mesh, in the skeleton's frame.
     """
     grid = solid_voxels(vertices, faces, resolution=JOINT_TEST_RESOLUTION)
+    body = np.array([kind != JointKind.HELPER for kind in skeleton.kinds])
     bones = skeleton.bones()
     length = np.linalg.norm(skeleton.positions[bones[:, 1]] - skeleton.positions[bones[:, 0]], axis=1) if len(bones) else np.zeros(0)
     return {
-        "joints_inside": float(grid.inside(skeleton.positions).mean()),
+        "joints_inside": float(grid.inside(skeleton.positions[body]).mean()) if body.any() else 1.0,
         "zero_length_bone_share": float((length < ZERO_BONE * model_size(vertices)).mean()) if len(length) else 0.0,
     }
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from simcore.gate.measures import skeleton_figures
 from simcore.geometry.capsule_creatures import quadruped
 from simcore.geometry.mesh import IngestedMesh
 from simcore.options import JobOptions
@@ -44,7 +45,7 @@ def test_no_root_is_added_far_away_past_the_joint_cap_or_over_a_joint(shift, max
 
 def _state(tmp_path: Path, **options) -> PipelineState:
     vertices, faces, _ = quadruped()  # stands on y = 0 around the origin
-    state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"), JobOptions(skeleton="geometric", **options), tmp_path)
+    state = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb"), JobOptions(**{"skeleton": "geometric", **options}), tmp_path)
     state.mesh = IngestedMesh(vertices, faces, b"")
     return state
 
@@ -69,3 +70,16 @@ def test_root_joint_none_keeps_the_body_root(tmp_path):
     _run(state)
     assert state.skeleton is not None and JointKind.HELPER not in state.skeleton.kinds
     assert "origin_root" not in state.report["skeleton"]
+
+
+def test_the_gate_counts_only_body_joints_inside(tmp_path):
+    state = _state(tmp_path, skeleton="geometric", max_joints=12)
+    _run(state)
+    assert state.skeleton is not None and state.mesh is not None
+    body = Skeleton(state.skeleton.positions[1:], np.maximum(state.skeleton.parents[1:] - 1, -1), state.skeleton.names[1:])
+    helper_outside = Skeleton(np.vstack([[0.0, -2.0, 0.0], body.positions]), state.skeleton.parents,
+                              state.skeleton.names, state.skeleton.kinds)
+    plain = skeleton_figures(body, state.mesh.vertices, state.mesh.faces)["joints_inside"]
+    assert skeleton_figures(helper_outside, state.mesh.vertices, state.mesh.faces)["joints_inside"] == plain
+    free = Skeleton(helper_outside.positions, helper_outside.parents, helper_outside.names)  # the same joint, not a helper
+    assert skeleton_figures(free, state.mesh.vertices, state.mesh.faces)["joints_inside"] < plain
