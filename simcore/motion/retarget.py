@@ -2,7 +2,8 @@
 
 Method (world-space delta transfer):
 1. Map target joints to source joints (`map_joints`: names, else chain structure, or where the bones lie for
-   two skeletons of one body; user overrides win) and
+   two skeletons of one body; user overrides win; a helper root at the file's origin is left out and stays
+   unmapped and still, and no helper is ever a foot) and
    find the quarter turn about +Y that makes the source face the way the target faces. Of several target
    joints on one chain mapped to one source joint, only the one nearest it bends (`one_pivot_per_source_joint`;
    for one body, the target's root keeps its source joint too).
@@ -47,7 +48,8 @@ from simcore.motion.types import JointAnimation, MotionClip
 from simcore.options import MotionOptions
 from simcore.skeleton import kinematics
 from simcore.skeleton.mixamo import BODY_JOINTS
-from simcore.skeleton.types import Skeleton, is_at_or_below, tree_depths
+from simcore.skeleton.origin_root import body_tree
+from simcore.skeleton.types import JointKind, Skeleton, is_at_or_below, tree_depths
 
 MIN_BODY_SLOTS = 8  # shared Mixamo body slots needed to trust name matching over structure
 CONTACT_BAND = 0.05  # joints within this fraction of the height above the lowest one touch the floor
@@ -276,7 +278,10 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     shares = None
     if same_body and clip.bind_weights is not None and target_weights is not None:
         shares = flesh_shares(target_weights, clip.bind_weights)
-    mapping, method, turns = map_joints(source, target, options.joint_map, same_body=same_body, shares=shares)
+    body, skipped = body_tree(target)  # a helper root at the file's origin stays unmapped and still
+    mapping, method, turns = map_joints(source, body, options.joint_map, same_body=same_body,
+                                        shares=None if shares is None else shares[skipped:])
+    mapping = {t + skipped: s for t, s in mapping.items()}
     if not mapping:
         raise InvalidInput("no joint of the motion could be matched to the character's skeleton",
                            code="no_joint_map", field="motion.joint_map")
@@ -311,7 +316,8 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     motion_root = _motion_root(source, anim, mapping, tree_depths(parents))
     source_root = mapping[motion_root]
     moving = _subtree(parents, motion_root)
-    contacts_t = _contacts(target.positions, np.flatnonzero(moving))
+    body = np.flatnonzero([kind != JointKind.HELPER for kind in target.kinds])  # a helper root on the floor is no foot
+    contacts_t = body[_contacts(target.positions[body], np.flatnonzero(moving[body]))]
     contacts_s = _contacts(rest_s, np.flatnonzero(_subtree(source.parents, source_root)))
     touching = sorted({mapping[j] for j in contacts_t.tolist() if j in mapping})
     if same_body and touching:  # one body: the source joints at our feet touch its floor (feet may hang off an IK root)

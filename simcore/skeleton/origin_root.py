@@ -38,3 +38,13 @@ def origin_root(skeleton: Skeleton, vertices: np.ndarray, max_joints: int) -> tu
     rooted = Skeleton(np.vstack([np.zeros(3), skeleton.positions]), parents, [name, *skeleton.names],
                       [JointKind.HELPER, *skeleton.kinds])
     return rooted, "added at the file's origin"
+
+
+def body_tree(skeleton: Skeleton) -> tuple[Skeleton, int]:
+    """The skeleton below a helper root that has one child (`origin_root`'s), and 1; else the skeleton and 0. Skinning
+    and retargeting work on the body tree, so the body is skinned and animated exactly as without the root."""
+    if skeleton.kinds[0] != JointKind.HELPER or skeleton.children()[0] != [1] or np.count_nonzero(skeleton.parents < 0) != 1:
+        return skeleton, 0
+    orient = None if skeleton.orientations is None else skeleton.orientations[1:]
+    return Skeleton(skeleton.positions[1:], np.maximum(skeleton.parents[1:] - 1, -1), skeleton.names[1:],
+                    skeleton.kinds[1:], orient), 1

@@ -13,6 +13,7 @@ from simcore.motion.retarget import map_joints, retarget
 from simcore.motion.types import JointAnimation, MotionClip
 from simcore.options import MotionOptions
 from simcore.skeleton import kinematics
+from simcore.skeleton.origin_root import origin_root
 from simcore.skeleton.types import Skeleton
 from tests.simcore.motion.motion_samples import bvh_text, humanoid
 
@@ -82,6 +83,17 @@ def test_t_pose_source_drives_a_pose_target():
     # The right arm is not animated: it goes from the target's A-pose to the source's T-pose.
     r_hand, r_arm = target.names.index("mixamorig:RightHand"), target.names.index("mixamorig:RightArm")
     assert pos[0, r_hand, 1] == pytest.approx(pos[0, r_arm, 1], abs=1e-9)
+
+
+def test_a_helper_root_at_the_origin_stays_still_and_is_no_foot():
+    skel = humanoid()
+    clip = _random_clip(skel)
+    target, why = origin_root(skel, skel.positions, max_joints=64)
+    assert why == "added at the file's origin"
+    out = retarget(clip, target)
+    world = _world(target, out.animation)[..., :3, 3]
+    assert np.allclose(world[:, 0], 0.0) and target.names[0] not in out.contact_joints and target.names[0] not in out.mapping
+    assert np.allclose(world[:, 1:], _world(skel, clip.animation)[..., :3, 3], atol=1e-9)
 
 
 def test_root_motion_scales_with_hip_height_and_feet_stay_down():

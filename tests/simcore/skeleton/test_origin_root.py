@@ -65,11 +65,17 @@ def test_a_job_hangs_its_skeleton_from_the_origin_and_skins_nothing_to_it(tmp_pa
     np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
 
 
-def test_root_joint_none_keeps_the_body_root(tmp_path):
-    state = _state(tmp_path, root_joint="none")
+def test_root_joint_none_keeps_the_body_root_and_the_body_is_skinned_alike_either_way(tmp_path):
+    for sub in ("none", "origin"):
+        (tmp_path / sub).mkdir()
+    state = _state(tmp_path / "none", root_joint="none")
     _run(state)
     assert state.skeleton is not None and JointKind.HELPER not in state.skeleton.kinds
     assert "origin_root" not in state.report["skeleton"]
+    rooted = _state(tmp_path / "origin")
+    _run(rooted)
+    assert rooted.weights is not None and state.weights is not None
+    np.testing.assert_array_equal(rooted.weights[:, 1:].toarray(), state.weights.toarray())
 
 
 def test_the_gate_counts_only_body_joints_inside(tmp_path):
