@@ -316,8 +316,8 @@ def retarget(clip: MotionClip, target: Skeleton, options: MotionOptions | None =
     motion_root = _motion_root(source, anim, mapping, tree_depths(parents))
     source_root = mapping[motion_root]
     moving = _subtree(parents, motion_root)
-    body = np.flatnonzero([kind != JointKind.HELPER for kind in target.kinds])  # a helper root on the floor is no foot
-    contacts_t = body[_contacts(target.positions[body], np.flatnonzero(moving[body]))]
+    deforming = np.flatnonzero([kind != JointKind.HELPER for kind in target.kinds])  # a helper on the floor is no foot
+    contacts_t = deforming[_contacts(target.positions[deforming], np.flatnonzero(moving[deforming]))]
     contacts_s = _contacts(rest_s, np.flatnonzero(_subtree(source.parents, source_root)))
     touching = sorted({mapping[j] for j in contacts_t.tolist() if j in mapping})
     if same_body and touching:  # one body: the source joints at our feet touch its floor (feet may hang off an IK root)
