@@ -136,6 +136,7 @@ def test_upload_follow_view_pick_bone_and_download(page, dashboard_server, dev_a
     # plain summary on top, report tables folded below it
     summary = page.inner_text("#job-summary")
     assert "Skeleton: RigForge" in summary and "descriptive joint names" in summary and "warning" in summary, summary
+    assert "under a root joint at the file's origin" in summary, summary  # the fox stands on its file's origin
     page.click("#report-details > summary")
     page.wait_for_selector("#report-mesh")
     assert "'*_nope' matches no joint" in page.inner_text("#report-warnings")
