@@ -14,6 +14,7 @@ from simcore.motion.body_map import branch_candidates, fill_by_region, flesh_sha
 from simcore.motion.retarget import map_joints, one_pivot_per_source_joint, retarget
 from simcore.motion.types import JointAnimation, MotionClip
 from simcore.skeleton import kinematics
+from simcore.skeleton.origin_root import origin_root
 from simcore.skeleton.types import Skeleton
 
 
@@ -211,3 +212,26 @@ def test_a_bone_out_in_flesh_its_source_joint_moves_follows_that_joint():
     clip = MotionClip(source, anim, rest_is_standing=True, source_format="test", shares_bind_pose=True, bind_weights=artist)
     assert retarget(clip, target, target_weights=ours).mapping["cockpit"] == "body"
     assert retarget(clip, target).mapping["cockpit"] == "leg"
+
+
+def test_a_helper_root_neither_poisons_the_region_map_nor_moves():
+    """A joint that owns no bone (a helper root at the origin) gets a finite region cost from its position; it used
+    to make every cost NaN and map every joint to the source's root. The body maps as without it, and a same-body
+    clip leaves the helper where it is."""
+    source, body = _strip([0.0, 1.0], "s"), _strip([0.5, 0.75, 1.01, 1.26, 1.5], "t")
+    rooted, why = origin_root(body, body.positions, max_joints=64)
+    assert why == "added at the file's origin"
+    shares = np.ones((rooted.num_joints, source.num_joints))  # flesh each joint moves (`flesh_shares`)...
+    shares[0] = 0.0  # ...none for the helper
+    expected = {0: 0, **{k + 1: v for k, v in region_mapping(source, body, shares[1:]).items()}}
+    assert region_mapping(source, rooted, shares) == expected and expected[5] == 1
+    frames = 2
+    rot = np.tile([0.0, 0.0, 0.0, 1.0], (frames, 2, 1))
+    rot[1, 1] = Rotation.from_rotvec([0.0, 0.0, np.pi / 2]).as_quat()
+    anim = JointAnimation(["s0", "s1"], 30.0, rot, np.broadcast_to(kinematics.rest_local_matrices(source)[:, :3, 3], (frames, 2, 3)).copy())
+    clip = MotionClip(source, anim, rest_is_standing=True, source_format="test", shares_bind_pose=True)
+    plain, hung = retarget(clip, body), retarget(clip, rooted)
+    assert rooted.names[0] not in hung.mapping
+    world = _world(rooted, hung.animation)[:, :, :3, 3]
+    np.testing.assert_allclose(world[:, 0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(world[:, 1:], _world(body, plain.animation)[:, :, :3, 3], atol=1e-9)
