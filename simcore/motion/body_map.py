@@ -36,7 +36,8 @@ def _region_cost(source: Skeleton, target: Skeleton, shares: np.ndarray | None =
     """(Jt, Js) mean distance from points along each target joint's bones (a joint that owns none: its position) to
     each source joint's bones, plus TIE_BREAK × the mean distance to the middles of those bones. With `shares`
     (`flesh_shares`), a source joint moving under SHARE_OF_BEST as much of the target joint's flesh as the source
-    joint moving most costs more than any other (ruled out wherever another is allowed; a target joint that moves no flesh keeps every source joint).
+    joint moving most costs more than any other (ruled out wherever another is allowed; a target joint that moves
+    no flesh keeps every source joint).
 
     A target bone whose points all lie nearest a source joint's head is exactly as near the source bone ending
     there as the one starting there; which one wins would then follow rounding. The middles' term decides such

@@ -3,11 +3,11 @@
 The origin of an uploaded file is the pivot its author gave the character: the point on the floor under it, or
 the point a flying character hovers above. Game rigs hang the body from a root joint there (the bone that carries
 root motion in Unreal, Godot and Unity's generic rigs): in corpus `train` a joint of the artist's rig lies within
-6 % of the model's size of the origin in 71 of the 82 rigs (within 1 % in 45) (`rigforge eval skeleton`'s ground truth). A predicted
-skeleton gets that joint as a helper (JointKind.HELPER: it owns no bone and no weight, so it stays where it is
-while the body moves) when the origin lies within REACH model sizes of the mesh's bounding box (a file whose
-origin is far off was not authored around the character), when no joint of the skeleton is already within
-NEAR of it and when `max_joints` leaves room.
+6 % of the model's size of the origin in 71 of the 82 rigs, within 1 % in 45 (`rigforge eval skeleton`'s ground
+truth). A predicted skeleton gets that joint as a helper (JointKind.HELPER: it owns no bone and no weight, so it
+stays where it is while the body moves) when the origin lies within REACH model sizes of the mesh's bounding box
+(a file whose origin is far off was not authored around the character), when no joint of the skeleton is already
+within NEAR of it and when `max_joints` leaves room.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from simcore.skeleton.types import JointKind, Skeleton
 REACH = 1.0  # model sizes beyond the bounding box within which the origin is the character's pivot
 NEAR = 0.01  # model sizes: a joint this close to the origin already is the root there
 NAMES = ("root", "origin_root")
+ADDED = "added at the file's origin"
 
 
 def origin_root(skeleton: Skeleton, vertices: np.ndarray, max_joints: int) -> tuple[Skeleton, str]:
@@ -34,17 +35,13 @@ def origin_root(skeleton: Skeleton, vertices: np.ndarray, max_joints: int) -> tu
     if skeleton.num_joints >= max_joints:
         return skeleton, "max_joints leaves no room"
     name = next((n for n in NAMES if n not in skeleton.names), f"root_{skeleton.num_joints}")
-    parents = np.concatenate([[-1], np.where(skeleton.parents >= 0, skeleton.parents + 1, 0)])
-    rooted = Skeleton(np.vstack([np.zeros(3), skeleton.positions]), parents, [name, *skeleton.names],
-                      [JointKind.HELPER, *skeleton.kinds])
-    return rooted, "added at the file's origin"
+    return skeleton.under_root(np.zeros(3), name, JointKind.HELPER), ADDED
 
 
 def body_tree(skeleton: Skeleton) -> tuple[Skeleton, int]:
-    """The skeleton below a helper root that has one child (`origin_root`'s), and 1; else the skeleton and 0. Skinning
-    and retargeting work on the body tree, so the body is skinned and animated exactly as without the root."""
+    """The skeleton below a helper root that holds it by one child (`origin_root`'s, also when it comes back in an
+    edited skeleton.json), and 1; else the skeleton and 0. Skinning and retargeting work on the body tree, so the
+    body is skinned and animated exactly as without the root."""
     if skeleton.kinds[0] != JointKind.HELPER or skeleton.children()[0] != [1] or np.count_nonzero(skeleton.parents < 0) != 1:
         return skeleton, 0
-    orient = None if skeleton.orientations is None else skeleton.orientations[1:]
-    return Skeleton(skeleton.positions[1:], np.maximum(skeleton.parents[1:] - 1, -1), skeleton.names[1:],
-                    skeleton.kinds[1:], orient), 1
+    return skeleton.below_root(), 1

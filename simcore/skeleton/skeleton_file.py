@@ -2,8 +2,9 @@
 
 The file is the `skeleton.json` a job writes (`names`, `parents`, `positions` in the ingested mesh's frame, metres,
 +Y up; optional `orientations`, xyzw bind frames), edited: joints moved, added, deleted, re-parented or renamed.
-Joints may come in any order (one root); they are put parents-first. `kinds`, `file_order`, `file_parents` and
-`tokens` are ignored: an edited tree no longer follows the upload's skin order.
+Joints may come in any order (one root); they are put parents-first. Optional `kinds` (one JointKind value per
+joint) are kept, so a helper (the root a job puts at the file's origin) still takes no weight when the tree comes
+back; `file_order`, `file_parents` and `tokens` are ignored: an edited tree no longer follows the upload's skin order.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import numpy as np
 
 from simcore.errors import InvalidInput
 from simcore.io.json_bounds import JsonTooDeep, loads_bounded
-from simcore.skeleton.types import Skeleton, parents_first_order
+from simcore.skeleton.types import JointKind, Skeleton, parents_first_order
 
 MAX_FILE_BYTES = 1024 * 1024
 MAX_JOINTS = 256  # as options.max_joints
@@ -37,6 +38,17 @@ def _array(doc: dict, key: str, width: int | None, count: int) -> np.ndarray:
     if not np.all(np.isfinite(value)):
         raise _fail(f"'{key}' has non-finite numbers")
     return value
+
+
+def _kinds(doc: dict, count: int) -> list[JointKind]:
+    """The file's `kinds`, one per joint, or none (every joint then a plain one)."""
+    kinds = doc.get("kinds")
+    if kinds is None:
+        return []
+    allowed = {k.value for k in JointKind}
+    if not isinstance(kinds, list) or len(kinds) != count or not all(isinstance(k, str) and k in allowed for k in kinds):
+        raise _fail(f"'kinds' must list one of {sorted(allowed)} per joint")
+    return [JointKind(k) for k in kinds]
 
 
 def read_skeleton_file(data: bytes, vertices: np.ndarray | None = None) -> Skeleton:
@@ -82,5 +94,5 @@ def read_skeleton_file(data: bytes, vertices: np.ndarray | None = None) -> Skele
     if len(outside):
         name = names[int(outside[0])]
         raise _fail(f"joint {name!r} lies far outside the mesh (positions are in the mesh's frame, metres)")
-    skeleton = Skeleton(positions, parents, names, orientations=orientations)
+    skeleton = Skeleton(positions, parents, names, _kinds(doc, count), orientations=orientations)
     return skeleton.reordered(order).validate()

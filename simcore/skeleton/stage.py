@@ -25,7 +25,7 @@ from simcore.errors import InvalidInput, SimcoreError
 from simcore.geometry.ground import ground_faces
 from simcore.geometry.parts import SurfacePart, surface_parts
 from simcore.skeleton.coverage import unreached_parts
-from simcore.skeleton.origin_root import origin_root
+from simcore.skeleton.origin_root import ADDED, origin_root
 from simcore.skeleton.predict import SkeletonPrediction, predict_skeleton
 from simcore.skeleton.types import Skeleton
 
@@ -78,7 +78,10 @@ def predict_for_job(mesh: IngestedMesh, options: JobOptions, ground: np.ndarray,
         up_axis="y" if options.up_axis else None, forward_axis=options.forward_axis, geometric_params=geometric_params,
     )
     skeleton, why = job_root(prediction.skeleton, mesh, ground, options)
-    return prediction if why is None else replace(prediction, skeleton=skeleton, report={**prediction.report, "origin_root": why})
+    if why is None:
+        return prediction
+    return replace(prediction, skeleton=skeleton,
+                   report={**prediction.report, "origin_root": {"added": why == ADDED, "reason": why}})
 
 
 def job_root(skeleton: Skeleton, mesh: IngestedMesh, ground: np.ndarray, options: JobOptions) -> tuple[Skeleton, str | None]:

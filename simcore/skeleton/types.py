@@ -192,6 +192,20 @@ class Skeleton:
         sub = Skeleton(self.positions[kept], np.asarray(parents), [self.names[i] for i in kept], [self.kinds[i] for i in kept], orient)
         return sub, kept
 
+    def under_root(self, position: np.ndarray, name: str, kind: JointKind) -> Skeleton:
+        """The tree hung from one more joint at `position`, the new root (index 0; its frame world-aligned). The
+        upload's file layout (file_order, file_parents) does not carry over: for predicted trees and weight solves."""
+        orient = None if self.orientations is None else np.vstack([[0.0, 0.0, 0.0, 1.0], self.orientations])
+        return Skeleton(np.vstack([np.asarray(position, np.float64).reshape(1, 3), self.positions]),
+                        np.r_[-1, np.maximum(self.parents + 1, 0)], [name, *self.names], [kind, *self.kinds], orient)
+
+    def below_root(self) -> Skeleton:
+        """The tree without its root, whose one child becomes the root (the inverse of `under_root`)."""
+        if self.children()[0] != [1] or np.count_nonzero(self.parents < 0) != 1:
+            raise InvalidInput(f"the root joint {self.names[0]!r} does not hold the tree by one child", field="skeleton")
+        orient = None if self.orientations is None else self.orientations[1:]
+        return Skeleton(self.positions[1:], np.maximum(self.parents[1:] - 1, -1), self.names[1:], self.kinds[1:], orient)
+
     def to_dict(self) -> dict:
         """JSON-ready form (positions as lists)."""
         return {

@@ -51,8 +51,7 @@ def with_armature_root(vertices: np.ndarray, skeleton: Skeleton) -> Skeleton:
     most artist rigs (the model's training data) carry, whose child is the body's own centre joint."""
     below = skeleton.positions[0].copy()
     below[1] = float(vertices[:, 1].min())
-    return Skeleton(np.vstack([below, skeleton.positions]), np.r_[-1, np.maximum(skeleton.parents + 1, 0)],
-                    [ARMATURE_ROOT, *skeleton.names], [JointKind.FREE, *skeleton.kinds])
+    return skeleton.under_root(below, ARMATURE_ROOT, JointKind.FREE)
 
 
 def learned_weights(

@@ -21,7 +21,6 @@ from simcore.errors import InvalidInput
 from simcore.io.gltf_rig import root_holds_weight, weightless_joints
 from simcore.metrics.skinning import weight_stats
 from simcore.skeleton.origin_root import body_tree
-from simcore.skeleton.types import Skeleton
 from simcore.skinning.postprocess import bind_to_joint
 from simcore.skinning.predict import compute_weights
 
@@ -44,7 +43,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
     ground = state.ground_faces if state.ground_faces is not None else np.zeros(len(state.mesh.faces), bool)
     drop = _excluded(state)
     helpers = _weightless_in_upload(state) & ~drop
-    tree, skipped = _skinned_tree(state)
+    tree, skipped = body_tree(state.skeleton)  # a helper root at the file's origin: the body is skinned as without it
     result = compute_weights(
         state.mesh.vertices,
         state.mesh.faces[~ground],
@@ -53,7 +52,7 @@ def run(state: PipelineState, progress: StageProgress) -> None:
         max_influences=options.max_influences,
         smooth_iterations=options.smooth_iterations,
         progress=report,
-        root_deforms=_root_deforms(state),
+        root_deforms=bool(skipped) or _root_deforms(state),
         exclude=(drop | helpers)[skipped:],
     )
     weights = sp.hstack([sp.csr_matrix((len(state.mesh.vertices), skipped)), result.weights], format="csr")
@@ -89,17 +88,8 @@ def _kept_rig(state: PipelineState) -> RiggedAsset | None:
     return state.mesh.source_rig if keeping else None
 
 
-def _skinned_tree(state: PipelineState) -> tuple[Skeleton, int]:
-    """The tree the weights are computed on and how many leading joints it leaves out: a predicted skeleton's
-    helper root at the file's origin (`origin_root.body_tree`) is left out, so the body is skinned exactly as
-    without it (its own root bending the mesh) and the helper's column stays empty; else the whole skeleton."""
-    assert state.skeleton is not None, "run() checked it"
-    return (state.skeleton, 0) if state.options.skeleton == "keep" else body_tree(state.skeleton)
-
-
 def _root_deforms(state: PipelineState) -> bool:
-    """Whether the skeleton's root bends the mesh: a predicted skeleton's body root does (`_skinned_tree`); a kept
-    rig's does when the upload's
+    """Whether the skeleton's root bends the mesh: a predicted skeleton's does; a kept rig's does when the upload's
     own weights put more than a trace on it (a toy rig's first bone, a Mixamo Hips root), not when it is an armature
     root (most artist rigs; a skeleton file without weights is taken as one)."""
     if state.options.skeleton != "keep":

@@ -60,7 +60,7 @@ def test_a_job_hangs_its_skeleton_from_the_origin_and_skins_nothing_to_it(tmp_pa
     _run(state)
     assert state.skeleton is not None and state.weights is not None
     assert state.skeleton.kinds[0] == JointKind.HELPER and np.allclose(state.skeleton.positions[0], 0.0)
-    assert state.report["skeleton"]["origin_root"] == "added at the file's origin"
+    assert state.report["skeleton"]["origin_root"] == {"added": True, "reason": "added at the file's origin"}
     assert state.weights[:, 0].nnz == 0
     np.testing.assert_allclose(np.asarray(state.weights.sum(axis=1)).ravel(), 1.0, atol=1e-5)
 
@@ -89,3 +89,20 @@ def test_the_gate_counts_only_body_joints_inside(tmp_path):
     assert skeleton_figures(helper_outside, state.mesh.vertices, state.mesh.faces)["joints_inside"] == plain
     free = Skeleton(helper_outside.positions, helper_outside.parents, helper_outside.names)  # the same joint, not a helper
     assert skeleton_figures(free, state.mesh.vertices, state.mesh.faces)["joints_inside"] < plain
+
+
+def test_re_skinning_the_jobs_skeleton_json_gives_the_jobs_weights(tmp_path):
+    """The dashboard's re-skin keeps the job's skeleton.json (with its helper root): the body is skinned as the job
+    skinned it, its own root bending the mesh, not read as an armature root."""
+    for sub in ("job", "again"):
+        (tmp_path / sub).mkdir()
+    job = _state(tmp_path / "job")
+    _run(job)
+    again = PipelineState(PipelineInputs(tmp_path / "in.glb", "glb", skeleton_path=tmp_path / "job" / "skeleton.json"),
+                          JobOptions(skeleton="keep"), tmp_path / "again")
+    again.mesh = job.mesh
+    _run(again)
+    assert again.skeleton is not None and again.skeleton.kinds[0] == JointKind.HELPER
+    assert job.weights is not None and again.weights is not None
+    np.testing.assert_allclose(again.weights.toarray(), job.weights.toarray(), atol=1e-4)  # skeleton.json rounds to 1e-6 m
+

@@ -30,6 +30,12 @@ def test_joints_in_any_order_come_back_parents_first():
     np.testing.assert_allclose(skeleton.positions[1], [0.03, 0.05, 0])
 
 
+def test_kinds_follow_their_joints_into_parents_first_order():
+    doc = {**_edited(), "kinds": ["free", "helper", "spring"]}
+    skeleton = read_skeleton_file(json.dumps(doc).encode(), VERTICES)
+    assert [k.value for k in skeleton.kinds] == ["helper", "spring", "free"]  # base, bend, tip
+
+
 @pytest.mark.parametrize(("edit", "words"), [
     (lambda d: d.update(parents=[2, -1, 0]), "cycle"),
     (lambda d: d.update(parents=[-1, -1, 1]), "exactly one root"),
@@ -38,6 +44,8 @@ def test_joints_in_any_order_come_back_parents_first():
     (lambda d: d.update(names=[f"j{k}" for k in range(300)]), "1 to 256"),
     (lambda d: d["positions"].__setitem__(0, [0, 9.0, 0]), "far outside"),
     (lambda d: d.update(orientations=[[0, 0, 0, 2]] * 3), "unit quaternions"),
+    (lambda d: d.update(kinds=["free", "bogus", "free"]), "'kinds' must list"),
+    (lambda d: d.update(kinds=["free"]), "'kinds' must list"),
 ])
 def test_broken_files_are_refused_by_what_is_wrong(edit, words):
     doc = _edited()

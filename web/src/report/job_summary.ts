@@ -20,7 +20,7 @@ export function summaryLines(job: Job, report: Report | null): string[] {
     const how = SKELETON_METHODS[String(sk.method)] ?? `used the ${sk.method} method`;
     const names = typeof naming.preset !== "string" ? ", with the upload's joint names"
       : naming.reading === "structure" ? ", with descriptive joint names" : `, named for ${naming.preset}`;
-    const rooted = sk.origin_root === "added at the file's origin" ? ", under a root joint at the file's origin (for root motion; it takes no weight)" : "";
+    const rooted = obj(sk.origin_root).added === true ? ", under a root joint at the file's origin (for root motion; it takes no weight)" : "";
     lines.push(`Skeleton: RigForge ${how}: ${sk.joints} joints${names}${rooted}.`);
   }
   if (typeof skin.method === "string") lines.push(`Skinning: ${skin.method} weights, at most ${skin.max_influences ?? 4} bones per vertex.`);

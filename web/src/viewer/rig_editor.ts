@@ -12,9 +12,12 @@ import type { SceneView } from "./scene_view";
 
 type Vec3 = [number, number, number];
 
-/** The part of skeleton.json that is edited; the rest (tokens, kinds, skin order) no longer applies. A kept studio
- *  rig's bind frames (`orientations`, xyzw) stay with their joints, so its own clips still fit the edited rig. */
-export interface EditableSkeleton { names: string[]; parents: number[]; positions: Vec3[]; orientations?: number[][] | null }
+/** The part of skeleton.json that is edited; the rest (tokens, skin order) no longer applies. A kept studio
+ *  rig's bind frames (`orientations`, xyzw) stay with their joints, so its own clips still fit the edited rig, and
+ *  so do the joints' `kinds` (a root at the file's origin is a helper that takes no weight). */
+export interface EditableSkeleton {
+  names: string[]; parents: number[]; positions: Vec3[]; orientations?: number[][] | null; kinds?: string[] | null;
+}
 
 const JOINT = new THREE.Color("#7fd1ff"), SELECTED = new THREE.Color("#ff3b6b");
 
@@ -28,6 +31,7 @@ export function deleteJoint(s: EditableSkeleton, j: number): EditableSkeleton {
     parents: keep.map((i) => { const p = s.parents[i] === j ? parent : s.parents[i]; return p < 0 ? -1 : index.get(p)!; }),
     positions: keep.map((i) => [...s.positions[i]] as Vec3),
     orientations: s.orientations ? keep.map((i) => [...s.orientations![i]]) : null,
+    kinds: s.kinds ? keep.map((i) => s.kinds![i]) : null,
   };
 }
 
@@ -90,7 +94,7 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
   async function open(): Promise<void> {
     const doc = (await api.artifactJson(skeletonArt!.url)) as EditableSkeleton;
     skel = { names: [...doc.names], parents: [...doc.parents], positions: doc.positions.map((p) => [...p] as Vec3),
-      orientations: doc.orientations ? doc.orientations.map((q) => [...q]) : null };
+      orientations: doc.orientations ? doc.orientations.map((q) => [...q]) : null, kinds: doc.kinds ? [...doc.kinds] : null };
     origins = [...doc.names];
     const model = view.models[0];
     if (!model) return;
@@ -222,6 +226,7 @@ export function rigEditor(view: SceneView, jobId: string, artifacts: Artifact[])
     skel.parents.push(selected);
     skel.positions.push(p.map((v, i) => v + step[i]) as Vec3);
     skel.orientations?.push([...skel.orientations[selected]]);  // a new joint starts in its parent's frame
+    skel.kinds?.push("free");
     origins.push(null);
     rebuild();
     select(skel.names.length - 1);
