@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import typer
 
 from cli import eval_gate, eval_motion, eval_motion_rig, eval_parts, eval_skeleton, eval_skin, fit, jobs, keys, rig, server, submit, train, validate
@@ -27,5 +29,19 @@ eval_app.command("motion-rig")(eval_motion_rig.eval_motion_rig)
 eval_app.command("gate")(eval_gate.eval_gate)
 eval_app.command("parts")(eval_parts.eval_parts)
 
+
+
+def main() -> None:
+    """The console entry point: `app`, with any input error a command did not handle itself printed as one line
+    (code, field, message) and exit status 2 instead of a traceback."""
+    from simcore.errors import SimcoreError
+
+    try:
+        app()
+    except SimcoreError as exc:
+        typer.echo(f"error [{exc.code}]{f' ({exc.field})' if exc.field else ''}: {exc}", err=True)
+        sys.exit(2)
+
+
 if __name__ == "__main__":
-    app()
+    main()

@@ -86,3 +86,16 @@ def test_invalid_options_exit_2_naming_the_field(elsewhere, command):
     assert code == 2 and err.startswith("invalid --options:") and "skinning" in err
     code, err = rigforge(*command, "--options", "{not json")
     assert code == 2 and err.startswith("invalid --options:")
+
+
+def test_an_input_error_no_command_catches_is_one_line_with_its_field(tmp_path):
+    """The console entry point turns a SimcoreError into `error [code] (field): message`, exit 2, no traceback."""
+    import subprocess
+    import sys
+
+    (tmp_path / "MANIFEST.tsv").write_text("name\tsplit\n")
+    done = subprocess.run([sys.executable, "-m", "cli.main", "eval", "skin", str(tmp_path), "--method", "nonsense"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("error [invalid_option] (method): unknown skinning method 'nonsense'")
+    assert "Traceback" not in done.stderr
