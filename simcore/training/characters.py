@@ -7,7 +7,7 @@ character i of a source draws from default_rng([seed, source, i]).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from functools import partial
 from pathlib import Path
 
@@ -39,10 +39,10 @@ def corpus_characters(root: Path, split: str, skipped: dict[str, str]) -> Iterat
 
 
 def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str], *, train: Make, val: Make,
-                   body: Make) -> tuple[Iterator[Job], int]:
+                   body: Make, rigs: Sequence[str] | None = None) -> tuple[Iterator[Job], int]:
     """(jobs for sample_cache.fill_cache, their count): corpus train characters made by `train`, corpus val by
-    `val`, then `bodies` anny bodies by `body`."""
-    from simcore.training.anny_bodies import anny_bodies
+    `val`, then `bodies` anny bodies by `body`, in anny's `rigs` taken in turn (None: anny_bodies.RIGS)."""
+    from simcore.training.anny_bodies import RIGS, anny_bodies
 
     sources = [list(corpus_characters(corpus, "train", skipped)), list(corpus_characters(corpus, "val", skipped))]
 
@@ -53,7 +53,7 @@ def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str]
         for source, (split, make) in enumerate((("train", train), ("val", val))):
             for i, c in enumerate(sources[source]):
                 yield job(split, make, c, np.random.default_rng([seed, source, i]))
-        people = anny_bodies(bodies, np.random.default_rng([seed, 2])) if bodies else iter(())
+        people = anny_bodies(bodies, np.random.default_rng([seed, 2]), rigs or RIGS) if bodies else iter(())
         for i, c in enumerate(people):
             yield job("train", body, c, np.random.default_rng([seed, 3, i]))
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from simcore.training.anny_bodies import check_rigs
 from simcore.training.characters import Make, character_jobs
 from simcore.training.sample_cache import fill_cache
 from simcore.training.skin_samples import Character, make_sample, normalised, variants
@@ -27,6 +28,7 @@ class DataConfig:
     variants: int = 6  # augmented copies of each training character
     anny_bodies: int = 48
     anny_variants: int = 2
+    anny_rigs: tuple[str, ...] = ("mixamo", "game_engine")  # anny rig conventions, taken in turn (anny_bodies.ALL_RIGS)
     vertices: int = 3000  # kept per sample
     val_vertices: int = 4000
     pose_degrees: float = 35.0
@@ -34,6 +36,9 @@ class DataConfig:
     decimate: float = 0.0  # chance that a variant that is not subdivided is decimated (skin_samples.decimated)
     helpers: bool = False  # joints a character's weights never use own no bone, as in a job keeping a rig (make_sample)
     seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_rigs(self.anny_rigs)  # a typo fails here, not after the corpus characters are built
 
 
 def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, int], None],
@@ -50,5 +55,6 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
 
     jobs, total = character_jobs(
         Path(config.corpus), config.seed, config.anny_bodies, skipped, train=posed(config.variants),
-        val=lambda c, rng: [make_sample(normalised(c), rng, config.val_vertices, helpers=config.helpers).arrays()], body=posed(config.anny_variants))
+        val=lambda c, rng: [make_sample(normalised(c), rng, config.val_vertices, helpers=config.helpers).arrays()], body=posed(config.anny_variants),
+        rigs=tuple(config.anny_rigs))
     return fill_cache(out, asdict(config), jobs, total, skipped, report, workers)

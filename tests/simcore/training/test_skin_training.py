@@ -163,3 +163,14 @@ def test_helper_samples_never_offer_a_weightless_joint_as_the_nearest_bone() -> 
     index = pole.num_joints - 1
     assert (plain.inputs.candidates[:, 0] == index).any()
     assert not (helped.inputs.candidates[:, 0] == index).any() and np.all(np.isfinite(helped.inputs.pair))
+
+
+@pytest.mark.parametrize("rigs", [(), ("mixamo", "mixamoo")])
+def test_an_unknown_or_empty_anny_rig_list_fails_when_the_config_is_read(rigs: tuple[str, ...]) -> None:
+    from simcore.errors import InvalidInput
+    from simcore.training.skin_dataset import DataConfig
+
+    with pytest.raises(InvalidInput, match="anny rigs must be some of mixamo, game_engine, cmu_mb") as caught:
+        DataConfig(anny_rigs=rigs)
+    assert caught.value.field == "data.anny_rigs"
+    assert DataConfig(anny_rigs=("cmu_mb", "soma")).anny_rigs == ("cmu_mb", "soma")
