@@ -84,6 +84,9 @@ def eval_skin(
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
     pipeline: Annotated[bool, typer.Option(help="add full-pipeline rows: our skeleton + our weights vs the artist's rig")] = False,
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
+    model: Annotated[Path | None, typer.Option(exists=True, dir_okay=False,
+                                               help="learned skinning weights (.safetensors) to score instead of the shipped ones, "
+                                                    "e.g. a fresh `rigforge train skin` output")] = None,
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
     from simcore.evaluation.skin_eval import OUR_METHODS, evaluate_skinning
@@ -91,7 +94,8 @@ def eval_skin(
     methods = [m for m in OUR_METHODS if m != "auto"] if method == "all" else [method]
     console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:
-        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split, on_asset=lambda n: status.update(f"skinning {n}"))
+        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split, learned_model=model,
+                                   on_asset=lambda n: status.update(f"skinning {n}"))
     render(report, console)
     write_report_json(console, json_path, report.to_dict())
 

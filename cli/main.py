@@ -6,7 +6,23 @@ import sys
 
 import typer
 
-from cli import eval_gate, eval_motion, eval_motion_rig, eval_parts, eval_skeleton, eval_skin, fit, jobs, keys, rig, server, submit, train, validate
+from cli import (
+    eval_gate,
+    eval_motion,
+    eval_motion_rig,
+    eval_parts,
+    eval_skeleton,
+    eval_skin,
+    fit,
+    jobs,
+    keys,
+    rig,
+    server,
+    submit,
+    train,
+    train_skin_cv,
+    validate,
+)
 
 app = typer.Typer(help="RigForge: automatic rigging and skinning.", no_args_is_help=True, pretty_exceptions_enable=False)
 eval_app = typer.Typer(help="Quality evaluations on a directory of rigged assets.", no_args_is_help=True)
@@ -21,6 +37,7 @@ app.add_typer(jobs.app, name="jobs")
 app.command()(validate.validate)
 app.command()(fit.fit)
 app.add_typer(eval_app, name="eval")
+train.app.command("skin-cv")(train_skin_cv.skin_cv)
 app.add_typer(train.app, name="train")
 eval_app.command("skeleton")(eval_skeleton.eval_skeleton)
 eval_app.command("skin")(eval_skin.eval_skin)

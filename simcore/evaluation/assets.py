@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import csv
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 from pathlib import Path
 
 from simcore.errors import InvalidInput, SimcoreError
@@ -17,28 +17,66 @@ def problem(exc: Exception) -> str:
     return f"{kind}: {exc}"[:300]
 
 
-def read_categories(directory: Path) -> dict[str, str]:
-    """Asset name (and file stem) → category from DIR/MANIFEST.tsv (`name`, `file`, `category` columns); {} without one."""
+def manifest_rows(directory: Path) -> list[dict[str, str]] | None:
+    """The rows of DIR/MANIFEST.tsv (tab-separated, a header row), or None when there is none."""
     manifest = Path(directory) / "MANIFEST.tsv"
     if not manifest.is_file():
-        return {}
-    out: dict[str, str] = {}
+        return None
     with manifest.open(newline="", encoding="utf-8") as fh:
-        for row in csv.DictReader(fh, delimiter="\t"):
-            category = (row.get("category") or "").strip() or "unknown"
-            for key in (row.get("name"), Path(row.get("file") or "").stem):
-                if key:
-                    out[key.strip()] = category
+        return list(csv.DictReader(fh, delimiter="\t"))
+
+
+def _by_name(directory: Path, value: str, default: str) -> dict[str, str]:
+    """Asset name (and file stem) → `value` (a column, or `family` read from the `notes` column's "family=X") of
+    each MANIFEST.tsv row, `default` where it is empty; {} without a manifest."""
+    out: dict[str, str] = {}
+    for row in manifest_rows(directory) or []:
+        if value == "family":
+            notes = [part.strip() for part in (row.get("notes") or "").split(";")]
+            found = next((n.removeprefix("family=").strip() for n in notes if n.startswith("family=")), "")
+        else:
+            found = (row.get(value) or "").strip()
+        for key in (row.get("name"), Path(row.get("file") or "").stem):
+            if key:
+                out[key.strip()] = found or (key.strip() if default == "name" else default)
     return out
+
+
+def read_categories(directory: Path) -> dict[str, str]:
+    """Asset name (and file stem) → category from DIR/MANIFEST.tsv (`name`, `file`, `category` columns); {} without one."""
+    return _by_name(directory, "category", "unknown")
+
+
+def read_families(directory: Path) -> dict[str, str]:
+    """Asset name (and file stem) → source family from DIR/MANIFEST.tsv (`family=X` in its `notes`; an asset
+    without one is its own family); {} without a manifest."""
+    return _by_name(directory, "family", "name")
+
+
+def family_folds(directory: Path, split: str, folds: int) -> list[list[str]]:
+    """The asset names of `split` in `folds` groups that never share a source family, as even in size as whole
+    families allow (largest family first, each into the smallest group so far; deterministic)."""
+    if folds < 2:
+        raise InvalidInput("family folds need at least 2 groups", code="invalid_option", field="folds")
+    families = read_families(directory)
+    members: dict[str, list[str]] = {}
+    for path in split_files(directory, split):
+        members.setdefault(families.get(path.stem, path.stem), []).append(path.stem)
+    if len(members) < folds:
+        raise InvalidInput(f"split {split!r} has {len(members)} families, fewer than {folds} folds", code="invalid_option",
+                           field="folds")
+    groups: list[list[str]] = [[] for _ in range(folds)]
+    for family in sorted(members, key=lambda f: (-len(members[f]), f)):
+        min(groups, key=lambda g: (len(g), groups.index(g))).extend(sorted(members[family]))
+    return [sorted(g) for g in groups]
 
 
 def split_files(directory: Path, split: str) -> list[Path]:
     """The files MANIFEST.tsv (`file` and `split` columns, the training corpus layout) lists for `split`."""
-    manifest = Path(directory) / "MANIFEST.tsv"
-    if not manifest.is_file():
+    table = manifest_rows(directory)
+    if table is None:
         raise InvalidInput(f"{directory} has no MANIFEST.tsv to read split {split!r} from", code="no_manifest", field="split")
-    with manifest.open(newline="", encoding="utf-8") as fh:
-        rows = [r for r in csv.DictReader(fh, delimiter="\t") if (r.get("split") or "").strip() == split and r.get("file")]
+    rows = [r for r in table if (r.get("split") or "").strip() == split and r.get("file")]
     if not rows:
         raise InvalidInput(f"MANIFEST.tsv in {directory} lists no file in split {split!r}", code="empty_split", field="split")
     return sorted(Path(directory) / r["file"].strip() for r in rows)
@@ -55,15 +93,19 @@ def asset_files(directory: Path, split: str | None = None) -> list[Path]:
 
 
 def rigged_assets(
-    directory: Path, skipped: dict[str, str] | None = None, split: str | None = None
+    directory: Path, skipped: dict[str, str] | None = None, split: str | None = None,
+    names: Collection[str] | None = None,
 ) -> Iterator[tuple[str, str, GltfDocument, RiggedAsset]]:
     """(name, category, document, rigged asset) for each readable skinned .glb/.gltf in `directory`, by name
-    (with `split`, the files MANIFEST.tsv lists for that split, wherever they lie below `directory`).
+    (with `split`, the files MANIFEST.tsv lists for that split, wherever they lie below `directory`; with `names`,
+    only those file stems).
 
     Files that do not read as a rig (no skin, malformed) go to `skipped` as name → "code: message".
     """
     categories = read_categories(directory)
     for path in asset_files(directory, split):
+        if names is not None and path.stem not in names:
+            continue
         try:
             doc = GltfDocument.from_bytes(path.read_bytes())
             asset = read_rigged_asset(doc)

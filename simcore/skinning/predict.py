@@ -7,6 +7,7 @@ import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -23,7 +24,7 @@ from simcore.model_weights import ModelUnavailable
 from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
-from simcore.skinning.learned import learned_summary, learned_weights
+from simcore.skinning.learned import WEIGHTS, learned_summary, learned_weights
 from simcore.skinning.mirror_weights import weight_mirror
 from simcore.skinning.parts import bind_rigid_parts
 from simcore.skinning.postprocess import SMOOTH_ITERATIONS, normalize_rows, smooth_on_surface, top_k
@@ -96,6 +97,7 @@ def compute_weights(
     progress: Callable[[float], None] | None = None,
     root_deforms: bool = False,
     exclude: np.ndarray | None = None,
+    learned_model: Path = WEIGHTS,
 ) -> SkinningResult:
     """Skinning weights of a mesh for a skeleton in the same space.
 
@@ -107,6 +109,7 @@ def compute_weights(
     that bends the mesh, not an artist's armature root (the learned method uses it; see learned.py).
     exclude: (J,) bool joints that get no weight (never the root): they stay in the tree, so every other bone keeps
     its shape, but own no bone to skin to (JointKind.HELPER, see bones.py) and their columns stay empty.
+    learned_model: the learned method's weights file (the shipped one; evaluations try freshly trained ones).
     Raises InvalidInput / LimitExceeded for unusable input.
     """
     if exclude is not None and np.any(exclude):
@@ -119,7 +122,7 @@ def compute_weights(
     reason, use_learned = "", False
     if method == "auto":
         try:
-            reason, use_learned = learned_summary(), True
+            reason, use_learned = learned_summary(learned_model), True
         except ModelUnavailable as exc:
             reason = f"{exc}; chose the hand-written method with the best unsupervised score"
     v, f = _check_inputs(vertices, faces, skeleton, max_influences)
@@ -137,7 +140,7 @@ def compute_weights(
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
-        extra = {"root_deforms": True} if root_deforms and name == "learned" else {}
+        extra: dict = {"model_path": learned_model, "root_deforms": root_deforms} if name == "learned" else {}
         dense = METHODS[name](v, f, skeleton, progress=lambda fraction: step(0.8 * fraction), **extra)
         if helpers.any():  # a helper owns no bone, but a method may still leave it a trace (a far learned candidate)
             dense[:, helpers] = 0.0

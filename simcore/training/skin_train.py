@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import cast
@@ -45,6 +45,7 @@ class TrainConfig:
     device: str = "cpu"  # "cuda" trains on the GPU (samples are moved there once)
     forward_samples: int = 1  # samples per forward pass (0: the whole batch); one at a time keeps a CPU's cache warm
     ema: float = 0.0  # > 0: validate and save an exponential moving average of the weights with this decay per step
+    exclude: tuple[str, ...] = ()  # training characters left out (held-out families: bench/skin_family_cv.py)
     model: ModelConfig = field(default_factory=ModelConfig)
 
 
@@ -59,10 +60,18 @@ def sample_tensors(s: SkinSample, device: str = "cpu") -> Tensors:
     return {k: torch.from_numpy(v).to(device) for k, v in arrays.items()}
 
 
-def load_samples(folder: Path, device: str = "cpu") -> tuple[list[Tensors], list[str]]:
-    """Every .npz sample in `folder` as tensors on `device`, with its category."""
+def sample_character(path: Path) -> str:
+    """The character a cached sample file was made from (`<character>_<k>.npz`, sample_cache's layout)."""
+    return path.stem.rsplit("_", 1)[0]
+
+
+def load_samples(folder: Path, device: str = "cpu", exclude: Collection[str] = ()) -> tuple[list[Tensors], list[str]]:
+    """Every .npz sample in `folder` as tensors on `device`, with its category; samples of `exclude`d characters
+    are left out."""
     out, cats = [], []
     for path in sorted(folder.glob("*.npz")):
+        if sample_character(path) in exclude:
+            continue
         with np.load(path, allow_pickle=False) as data:
             s = SkinSample.from_arrays(dict(data))
         out.append(sample_tensors(s, device))
@@ -130,7 +139,7 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
     torch.manual_seed(config.seed)
     torch.set_num_threads(config.threads)
     rng = np.random.default_rng(config.seed)
-    train, cats = load_samples(data / "train", config.device)
+    train, cats = load_samples(data / "train", config.device, set(config.exclude))
     val, _ = load_samples(data / "val", config.device)
     if not train or not val:
         raise FileNotFoundError(f"no training or validation samples under {data}: run `rigforge train data` first")

@@ -8,7 +8,6 @@ import trimesh
 
 from simcore.errors import InvalidInput
 from simcore.metrics.skinning import weight_stats
-from simcore.model_weights import ModelUnavailable
 from simcore.skeleton.types import Skeleton
 from simcore.skinning import predict
 from simcore.skinning.geodesic import geodesic_distances
@@ -58,15 +57,11 @@ def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method
     assert ("learned model: corpus val L1" in result.reason) == (method == "auto")
 
 
-def test_auto_falls_back_to_the_hand_written_methods_without_the_model(bent_tube, monkeypatch: pytest.MonkeyPatch) -> None:
-    def unavailable() -> str:
-        raise ModelUnavailable("learned skinning weights not found at /nowhere")
-
-    monkeypatch.setattr(predict, "learned_summary", unavailable)
+def test_auto_falls_back_to_the_hand_written_methods_without_the_model(bent_tube, tmp_path) -> None:
     v, f, skeleton = bent_tube
-    result = compute_weights(v, f, skeleton, method="auto")
+    result = compute_weights(v, f, skeleton, method="auto", learned_model=tmp_path / "nowhere.safetensors")
     assert set(result.scores) == {"geodesic", "heat"} and result.method in {"geodesic", "heat"}
-    assert "not found at /nowhere" in result.reason
+    assert "nowhere.safetensors" in result.reason
 
 
 def test_duplicate_vertices_get_identical_weights(bent_tube) -> None:
@@ -133,7 +128,6 @@ def test_rejects_bad_input(bent_tube) -> None:
 def test_refuses_more_weights_than_memory_allows(bent_tube, monkeypatch) -> None:
     """Dense (vertices × joints) arrays would be OOM-killed (three lost attempts, no reason): refuse up front."""
     from simcore.errors import LimitExceeded
-    from simcore.skinning import predict
 
     v, f, skeleton = bent_tube
     monkeypatch.setattr(predict, "MAX_ENTRIES", len(v) * skeleton.num_joints - 1)
@@ -144,7 +138,6 @@ def test_refuses_more_weights_than_memory_allows(bent_tube, monkeypatch) -> None
 
 
 def test_auto_reports_progress_while_the_methods_run(bent_tube, monkeypatch) -> None:
-    from simcore.skinning import predict
 
     monkeypatch.setattr(predict, "PROGRESS_POLL_S", 0.0)  # hear every checkpoint
     v, f, skeleton = bent_tube
@@ -156,7 +149,7 @@ def test_auto_reports_progress_while_the_methods_run(bent_tube, monkeypatch) -> 
 
 def test_cancel_stops_both_methods(bent_tube, monkeypatch) -> None:
     from simcore.errors import Canceled
-    from simcore.skinning import geodesic, predict
+    from simcore.skinning import geodesic
 
     monkeypatch.setattr(predict, "PROGRESS_POLL_S", 0.0)
     finished: list[bool] = []

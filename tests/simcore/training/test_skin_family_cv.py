@@ -1,0 +1,71 @@
+"""Family cross-validation of the skinning recipe (`rigforge train skin-cv`): folds never split a source family,
+each fold's model is trained without its held-out characters, and every train character is scored once, by a model
+that never saw it, beside the geodesic method."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import pytest
+from rich.console import Console
+
+from cli.train_skin_cv import render
+from simcore.errors import InvalidInput
+from simcore.evaluation.assets import family_folds, read_families
+from simcore.skinning.attention_model import ModelConfig
+from simcore.training.skin_dataset import DataConfig, build_skin_data
+from simcore.training.skin_family_cv import family_cv
+from simcore.training.skin_train import TrainConfig, load_samples
+from tests.simcore.io.studio_rig_fixtures import studio_rig, to_glb
+
+HEADER = "name\tfile\tcategory\tsplit\tnotes\n"
+
+
+def corpus(tmp_path: Path, rows: list[tuple[str, str, str]]) -> Path:
+    """A corpus folder of small rigs: rows of (name, split, notes), MANIFEST.tsv in the corpus layout."""
+    root = tmp_path / "corpus"
+    (root / "rigged").mkdir(parents=True)
+    glb = to_glb(studio_rig(["hips", "spine", "head"]))
+    lines = [HEADER]
+    for name, split, notes in rows:
+        (root / "rigged" / f"{name}.glb").write_bytes(glb)
+        lines.append(f"{name}\trigged/{name}.glb\thumanoid\t{split}\t{notes}\n")
+    (root / "MANIFEST.tsv").write_text("".join(lines))
+    return root
+
+
+def test_folds_keep_families_whole_and_balance_their_sizes(tmp_path: Path) -> None:
+    root = corpus(tmp_path, [("a1", "train", "family=fa; x"), ("a2", "train", "family=fa"), ("a3", "train", "family=fa"),
+                             ("b1", "train", "family=fb"), ("c1", "train", ""), ("d1", "train", "family=fd"),
+                             ("v1", "val", "family=fv")])
+    assert read_families(root)["c1"] == "c1" and read_families(root)["a2"] == "fa"
+    folds = family_folds(root, "train", 2)
+    assert sorted(sum(folds, [])) == ["a1", "a2", "a3", "b1", "c1", "d1"]
+    assert ["a1", "a2", "a3"] in folds and sorted(map(len, folds)) == [3, 3]
+    with pytest.raises(InvalidInput, match="4 families, fewer than 5 folds"):
+        family_folds(root, "train", 5)
+
+
+def test_every_train_character_is_scored_once_by_a_model_that_never_saw_it(tmp_path: Path) -> None:
+    root = corpus(tmp_path, [("a1", "train", "family=fa"), ("a2", "train", "family=fa"), ("b1", "train", "family=fb"),
+                             ("c1", "train", "family=fc"), ("v1", "val", "family=fv")])
+    cache = tmp_path / "cache"
+    build_skin_data(DataConfig(corpus=str(root), variants=2, anny_bodies=0, vertices=200, val_vertices=200), cache,
+                    lambda name, done, total: None)
+    assert len(load_samples(cache / "train", exclude={"a1", "a2"})[0]) == 4  # b1 and c1, two variants each
+    config = TrainConfig(steps=3, batch=2, points=64, val_every=3, log_every=1,
+                         model=ModelConfig(width=8, heads=2, bone_layers=1))
+    reports: list[tuple[int, int]] = []
+    result = family_cv(config, cache, root, 2, tmp_path / "cv", 1, lambda done, total: reports.append((done, total)))
+    held = [f["held_out"] for f in result["folds"]]
+    assert sorted(sum(held, [])) == ["a1", "a2", "b1", "c1"] and ["a1", "a2"] in held
+    for fold in result["folds"]:
+        assert fold["train_samples"] == 2 * (4 - len(fold["held_out"]))
+        assert {(r["name"], r["method"]) for r in fold["assets"]} == {(n, m) for n in fold["held_out"] for m in ("learned", "geodesic")}
+    summary = result["summary"]
+    assert summary["compared"] == 4 and not summary["errors"] and summary["mean"]["learned"]["assets"] == 4
+    assert reports[-1] == (6, 6) and len(reports) == len(set(reports))  # one report per change
+    out = io.StringIO()
+    render(result, Console(file=out, width=160))
+    assert "of 4 held-out characters" in out.getvalue() and "ALL (humanoid)" in out.getvalue()
