@@ -26,7 +26,11 @@ def _fmt(value: float | None, digits: int) -> str:
     return "-" if value is None else f"{value:.{digits}f}"
 
 
-def _cells(metrics: dict) -> list[str]:
+METRIC_HEADS = ("L1", "prec", "recall", "def", "def p95", "clip", "clip p95", "s")
+
+
+def metric_cells(metrics: dict) -> list[str]:
+    """One row's METRIC_HEADS cells ("-" where a metric is missing)."""
     return [
         _fmt(metrics.get("l1"), 3),
         _fmt(metrics.get("precision"), 2),
@@ -51,7 +55,7 @@ def render(report: SkinEvaluation, console: Console) -> None:
     table = Table(title="Skin-only on the assets' own skeletons; deformation in unit-cube units (random poses | own clips)")
     for head in ("asset", "category", "method"):
         table.add_column(head)
-    for head in ("L1", "prec", "recall", "def", "def p95", "clip", "clip p95", "s"):
+    for head in METRIC_HEADS:
         table.add_column(head, justify="right")
     names = list(dict.fromkeys(r.name for r in report.rows))
     for name in names:
@@ -59,20 +63,20 @@ def render(report: SkinEvaluation, console: Console) -> None:
         for i, r in enumerate(rows):
             first = i == 0
             label = r.method + (f" → {r.chosen}" if r.chosen else "") + _peer_mark(r)
-            cells = ["error"] + [""] * 7 if r.error else _cells(r.metrics)
+            cells = ["error"] + [""] * 7 if r.error else metric_cells(r.metrics)
             table.add_row(name if first else "", r.category if first else "", label, *cells, end_section=i == len(rows) - 1)
     categories = sorted({r.category for r in report.rows})
     subsets = [("MEAN (all)", None)] + [(f"MEAN ({c})", {r.name for r in report.rows if r.category == c}) for c in categories]
     for title, subset in subsets:
         for i, m in enumerate(report.methods()):
-            table.add_row(title if i == 0 else "", "", m, *_cells(report.mean(m, subset)), style="bold",
+            table.add_row(title if i == 0 else "", "", m, *metric_cells(report.mean(m, subset)), style="bold",
                           end_section=i == len(report.methods()) - 1)
     for peer, means in report.peer_means().items():  # peers with and without failed/partial solves, ours on the same assets
         scored = means["ok"] + means["partial"] + means["failed"]
         for title, key, count in ((f"MEAN ({peer} scored: {means['failed']} failed, {means['partial']} partial)", "scored", scored),
                                   (f"MEAN ({peer} solved)", "solved", means["ok"])):
             for i, m in enumerate(report.methods()):
-                table.add_row(title if i == 0 else "", f"{count} assets" if i == 0 else "", m, *_cells(means[key][m]),
+                table.add_row(title if i == 0 else "", f"{count} assets" if i == 0 else "", m, *metric_cells(means[key][m]),
                               style="bold", end_section=i == len(report.methods()) - 1)
     print_table_and_problems(console, table, report.skipped, (f"{r.name} {r.method}: {r.error}" for r in report.rows if r.error))
 

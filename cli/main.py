@@ -47,7 +47,6 @@ eval_app.command("gate")(eval_gate.eval_gate)
 eval_app.command("parts")(eval_parts.eval_parts)
 
 
-
 def main() -> None:
     """The console entry point: `app`, with any input error a command did not handle itself printed as one line
     (code, field, message) and exit status 2 instead of a traceback."""

@@ -11,13 +11,14 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, TypeVar
 
 import typer
 from rich.console import Console
 
 from cli.progress import count_bar
 
+T = TypeVar("T")
 app = typer.Typer(help="Train the learned models.", no_args_is_help=True)
 CONFIGS = Path(__file__).resolve().parent.parent / "simcore" / "training" / "configs"
 DEFAULT_CONFIG = CONFIGS / "skin_cpu.json"
@@ -26,13 +27,21 @@ ConfigOption = Annotated[Path, typer.Option("--config", exists=True, dir_okay=Fa
 WorkersOption = Annotated[int, typer.Option(min=1, help="processes building characters at once (the samples are the same)")]
 
 
-def _read(config: Path) -> dict:
+def read_config(config: Path) -> dict:
+    """A JSON training config (or a cache's summary file) as a dict."""
     return json.loads(config.read_text(encoding="utf-8"))
+
+
+def train_section(spec: dict, model_config: Callable[..., object], train_config: Callable[..., T]) -> T:
+    """The config's "train" section as `train_config`, its "model" part as `model_config`."""
+    section = dict(spec.get("train", {}))
+    section["model"] = model_config(**section.get("model", {}))
+    return train_config(**section)
 
 
 def _build(config: Path, build: Callable[..., dict], data_config: Callable[..., object], workers: int) -> None:
     """Run a sample builder on the config's "data" section into its "cache" on `workers` processes, with a progress bar."""
-    spec = _read(config)
+    spec = read_config(config)
     with count_bar("samples") as update:
         summary = build(data_config(**spec.get("data", {})), Path(spec["cache"]), update, workers)
     Console().print(f"train samples {summary['train']}, val samples {summary['val']}, failed characters {summary['failed']}")
@@ -43,9 +52,7 @@ def _build(config: Path, build: Callable[..., dict], data_config: Callable[..., 
 def _train(config: Path, data_command: str, train_command: str, model_config: Callable[..., object],
            train_config: Callable[..., object], train: Callable[..., dict], write_card: Callable[..., Path], score: str) -> dict:
     """Train on the config's cache, write the weights and their card; `score` is the val figure the bar shows."""
-    spec = _read(config)
-    section = dict(spec.get("train", {}))
-    section["model"] = model_config(**section.get("model", {}))
+    spec = read_config(config)
     log = Path(spec["log"])
     log.parent.mkdir(parents=True, exist_ok=True)
 
@@ -56,10 +63,10 @@ def _train(config: Path, data_command: str, train_command: str, model_config: Ca
         return ", ".join(parts)
 
     with count_bar("training") as update:
-        summary = train(train_config(**section), Path(spec["cache"]), Path(spec["out"]), log,
+        summary = train(train_section(spec, model_config, train_config), Path(spec["cache"]), Path(spec["out"]), log,
                         lambda step, total, entry: update(describe(entry), step, total))
     cache = Path(spec["cache"])
-    card = write_card(Path(spec["out"]), summary, _read(cache / "summary.json"), _read(cache / "data_config.json"),
+    card = write_card(Path(spec["out"]), summary, read_config(cache / "summary.json"), read_config(cache / "data_config.json"),
                       f"rigforge train {data_command} --config {config} && rigforge train {train_command} --config {config}")
     Console().print(f"model card: {card}")
     return summary

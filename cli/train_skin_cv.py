@@ -17,20 +17,18 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from cli.eval_skin import METRIC_HEADS, metric_cells
 from cli.progress import count_bar
-from cli.train import DEFAULT_CONFIG, ConfigOption
-
-
-def _cells(mean: dict) -> list[str]:
-    return [str(mean["assets"]), f"{mean['l1']:.3f}" if mean["l1"] is not None else "-",
-            f"{mean['deform_mean']:.4f}" if mean["deform_mean"] is not None else "-"]
+from cli.train import DEFAULT_CONFIG, ConfigOption, read_config, train_section
 
 
 def render(result: dict, console: Console) -> None:
     """Per fold and overall (per category): learned against geodesic on the held-out characters."""
-    table = Table(title="Skinning by held-out source family (L1 / random-pose deformation, unit cube)")
-    for column in ("fold / category", "method", "assets", "L1", "deform"):
-        table.add_column(column, justify="left" if column in ("fold / category", "method") else "right")
+    table = Table(title="Skinning by held-out source family (deformation in unit-cube units: random poses | own clips)")
+    for head in ("fold / category", "method"):
+        table.add_column(head)
+    for head in ("assets", *METRIC_HEADS):
+        table.add_column(head, justify="right")
     summary = result["summary"]
     sections = [(f"fold {f['fold']} ({len(f['held_out'])} held out, best step {f['best_step']})", f["mean"])
                 for f in result["folds"]]
@@ -38,8 +36,8 @@ def render(result: dict, console: Console) -> None:
     sections.append(("ALL", summary["mean"]))
     for title, means in sections:
         for i, (method, mean) in enumerate(means.items()):
-            table.add_row(title if i == 0 else "", method, *_cells(mean), end_section=i == len(means) - 1,
-                          style="bold" if title == "ALL" else None)
+            table.add_row(title if i == 0 else "", method, str(mean["assets"]), *metric_cells(mean),
+                          end_section=i == len(means) - 1, style="bold" if title == "ALL" else None)
     console.print(table)
     console.print(f"learned has the lower L1 on {summary['learned_wins_l1']} of {summary['compared']} held-out characters")
     for error in summary["errors"]:
@@ -59,10 +57,8 @@ def skin_cv(
     from simcore.training.skin_family_cv import family_cv
     from simcore.training.skin_train import TrainConfig
 
-    spec = json.loads(config.read_text(encoding="utf-8"))
-    section = dict(spec.get("train", {}))
-    section["model"] = ModelConfig(**section.get("model", {}))
-    train = TrainConfig(**section)
+    spec = read_config(config)
+    train = train_section(spec, ModelConfig, TrainConfig)
     if steps is not None:
         train = replace(train, steps=steps)
     corpus = Path(spec.get("data", {}).get("corpus", "../shared/corpus"))

@@ -26,31 +26,29 @@ def manifest_rows(directory: Path) -> list[dict[str, str]] | None:
         return list(csv.DictReader(fh, delimiter="\t"))
 
 
-def _by_name(directory: Path, value: str, default: str) -> dict[str, str]:
-    """Asset name (and file stem) → `value` (a column, or `family` read from the `notes` column's "family=X") of
-    each MANIFEST.tsv row, `default` where it is empty; {} without a manifest."""
-    out: dict[str, str] = {}
+def _keyed_rows(directory: Path) -> Iterator[tuple[str, dict[str, str]]]:
+    """(asset name, row) and (file stem, row) for each MANIFEST.tsv row; nothing without a manifest."""
     for row in manifest_rows(directory) or []:
-        if value == "family":
-            notes = [part.strip() for part in (row.get("notes") or "").split(";")]
-            found = next((n.removeprefix("family=").strip() for n in notes if n.startswith("family=")), "")
-        else:
-            found = (row.get(value) or "").strip()
         for key in (row.get("name"), Path(row.get("file") or "").stem):
             if key:
-                out[key.strip()] = found or (key.strip() if default == "name" else default)
-    return out
+                yield key.strip(), row
 
 
 def read_categories(directory: Path) -> dict[str, str]:
     """Asset name (and file stem) → category from DIR/MANIFEST.tsv (`name`, `file`, `category` columns); {} without one."""
-    return _by_name(directory, "category", "unknown")
+    return {key: (row.get("category") or "").strip() or "unknown" for key, row in _keyed_rows(directory)}
+
+
+def _family(row: dict[str, str]) -> str:
+    """The "family=X" entry of a row's `notes` (entries split by ";"), or ""."""
+    notes = (part.strip() for part in (row.get("notes") or "").split(";"))
+    return next((n.removeprefix("family=").strip() for n in notes if n.startswith("family=")), "")
 
 
 def read_families(directory: Path) -> dict[str, str]:
     """Asset name (and file stem) → source family from DIR/MANIFEST.tsv (`family=X` in its `notes`; an asset
     without one is its own family); {} without a manifest."""
-    return _by_name(directory, "family", "name")
+    return {key: _family(row) or key for key, row in _keyed_rows(directory)}
 
 
 def family_folds(directory: Path, split: str, folds: int) -> list[list[str]]:
@@ -67,7 +65,7 @@ def family_folds(directory: Path, split: str, folds: int) -> list[list[str]]:
                            field="folds")
     groups: list[list[str]] = [[] for _ in range(folds)]
     for family in sorted(members, key=lambda f: (-len(members[f]), f)):
-        min(groups, key=lambda g: (len(g), groups.index(g))).extend(sorted(members[family]))
+        groups[min(range(folds), key=lambda k: (len(groups[k]), k))].extend(members[family])
     return [sorted(g) for g in groups]
 
 

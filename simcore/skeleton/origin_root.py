@@ -42,6 +42,6 @@ def body_tree(skeleton: Skeleton) -> tuple[Skeleton, int]:
     """The skeleton below a helper root that holds it by one child (`origin_root`'s, also when it comes back in an
     edited skeleton.json), and 1; else the skeleton and 0. Skinning and retargeting work on the body tree, so the
     body is skinned and animated exactly as without the root."""
-    if skeleton.kinds[0] != JointKind.HELPER or skeleton.children()[0] != [1] or np.count_nonzero(skeleton.parents < 0) != 1:
+    if skeleton.kinds[0] != JointKind.HELPER or not skeleton.root_has_one_child():
         return skeleton, 0
     return skeleton.below_root(), 1

@@ -199,9 +199,13 @@ class Skeleton:
         return Skeleton(np.vstack([np.asarray(position, np.float64).reshape(1, 3), self.positions]),
                         np.r_[-1, np.maximum(self.parents + 1, 0)], [name, *self.names], [kind, *self.kinds], orient)
 
+    def root_has_one_child(self) -> bool:
+        """Whether the tree has one root and the root holds it by one child, joint 1 (what `below_root` needs)."""
+        return self.num_joints > 1 and self.children()[0] == [1] and np.count_nonzero(self.parents < 0) == 1
+
     def below_root(self) -> Skeleton:
         """The tree without its root, whose one child becomes the root (the inverse of `under_root`)."""
-        if self.children()[0] != [1] or np.count_nonzero(self.parents < 0) != 1:
+        if not self.root_has_one_child():
             raise InvalidInput(f"the root joint {self.names[0]!r} does not hold the tree by one child", field="skeleton")
         orient = None if self.orientations is None else self.orientations[1:]
         return Skeleton(self.positions[1:], np.maximum(self.parents[1:] - 1, -1), self.names[1:], self.kinds[1:], orient)

@@ -18,6 +18,7 @@ from simcore.evaluation.assets import rigged_assets
 from simcore.evaluation.skin_eval import clip_skin_matrices
 from simcore.metrics.skinning import unit_cube_frame
 from simcore.skeleton.types import Skeleton
+from simcore.training.anny_bodies import RIGS, anny_bodies
 from simcore.training.sample_cache import Job
 from simcore.training.skin_samples import Character
 
@@ -39,10 +40,9 @@ def corpus_characters(root: Path, split: str, skipped: dict[str, str]) -> Iterat
 
 
 def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str], *, train: Make, val: Make,
-                   body: Make, rigs: Sequence[str] | None = None) -> tuple[Iterator[Job], int]:
+                   body: Make, rigs: Sequence[str] = RIGS) -> tuple[Iterator[Job], int]:
     """(jobs for sample_cache.fill_cache, their count): corpus train characters made by `train`, corpus val by
-    `val`, then `bodies` anny bodies by `body`, in anny's `rigs` taken in turn (None: anny_bodies.RIGS)."""
-    from simcore.training.anny_bodies import RIGS, anny_bodies
+    `val`, then `bodies` anny bodies by `body`, in anny's `rigs` taken in turn."""
 
     sources = [list(corpus_characters(corpus, "train", skipped)), list(corpus_characters(corpus, "val", skipped))]
 
@@ -53,7 +53,7 @@ def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str]
         for source, (split, make) in enumerate((("train", train), ("val", val))):
             for i, c in enumerate(sources[source]):
                 yield job(split, make, c, np.random.default_rng([seed, source, i]))
-        people = anny_bodies(bodies, np.random.default_rng([seed, 2]), rigs or RIGS) if bodies else iter(())
+        people = anny_bodies(bodies, np.random.default_rng([seed, 2]), rigs) if bodies else iter(())
         for i, c in enumerate(people):
             yield job("train", body, c, np.random.default_rng([seed, 3, i]))
 

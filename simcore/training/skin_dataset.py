@@ -56,5 +56,5 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
     jobs, total = character_jobs(
         Path(config.corpus), config.seed, config.anny_bodies, skipped, train=posed(config.variants),
         val=lambda c, rng: [make_sample(normalised(c), rng, config.val_vertices, helpers=config.helpers).arrays()], body=posed(config.anny_variants),
-        rigs=tuple(config.anny_rigs))
+        rigs=config.anny_rigs)
     return fill_cache(out, asdict(config), jobs, total, skipped, report, workers)

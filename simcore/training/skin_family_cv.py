@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from simcore.evaluation.assets import family_folds
-from simcore.evaluation.skin_eval import ROW_KEYS, SkinEvaluation, SkinRow, evaluate_skinning
+from simcore.evaluation.skin_eval import SkinEvaluation, evaluate_skinning
 from simcore.training.skin_train import TrainConfig, train_skin
 
 METHODS = ("learned", "geodesic")
@@ -28,34 +28,31 @@ POLL_S = 1.0
 
 
 def run_fold(fold: int, names: list[str], config: TrainConfig, cache: Path, corpus: Path, out: Path,
-             progress: Any = None) -> dict:
+             progress: Any = None) -> tuple[dict, SkinEvaluation]:
     """Train without `names` (one fold's held-out characters), then skin them with that model and with geodesic.
-    `progress`: a queue that gets (fold, step, steps) as training goes. Returns the fold's JSON-ready result."""
+    `progress`: a queue that gets (fold, step) as training goes. Returns (the fold's facts, its evaluation)."""
     folder = out / f"fold_{fold}"
     folder.mkdir(parents=True, exist_ok=True)
     model = folder / "skin_attention.safetensors"
 
     def report(step: int, total: int, entry: dict) -> None:
         if progress is not None:
-            progress.put((fold, step, total))
+            progress.put((fold, step))
 
     summary = train_skin(replace(config, exclude=tuple(names)), cache, model, folder / "log.jsonl", report)
     evaluation = evaluate_skinning(corpus, list(METHODS), split="train", names=set(names), learned_model=model)
-    return {"fold": fold, "held_out": names, "best_step": summary["best_step"], "trainer_val": summary["val"],
-            "train_samples": summary["train_samples"], **evaluation.to_dict()}
+    facts = {"fold": fold, "held_out": names, "best_step": summary["best_step"], "trainer_val": summary["val"],
+             "train_samples": summary["train_samples"], "mean": {m: evaluation.mean(m) for m in METHODS}}
+    return facts, evaluation
 
 
-def summarise(folds: list[dict]) -> dict:
+def summarise(merged: SkinEvaluation) -> dict:
     """Means over every held-out character of all folds, per method and per category, and how often learned wins."""
-    merged = SkinEvaluation()
-    for f in folds:
-        for row in f["assets"]:
-            metrics = {k: row[k] for k in ROW_KEYS if k in row}
-            merged.rows.append(SkinRow(row["name"], row["category"], row["method"], metrics, error=row.get("error")))
     categories = sorted({r.category for r in merged.rows})
     by_category = {c: {m: merged.mean(m, {r.name for r in merged.rows if r.category == c}) for m in METHODS}
                    for c in categories}
-    l1 = {m: {r.name: float(r.metrics["l1"] or 0.0) for r in merged.rows if r.method == m and r.error is None} for m in METHODS}
+    l1 = {m: {r.name: float(v) for r in merged.rows if r.method == m and (v := r.metrics.get("l1")) is not None}
+          for m in METHODS}
     both = sorted(set(l1["learned"]) & set(l1["geodesic"]))
     wins = sum(l1["learned"][n] < l1["geodesic"][n] for n in both)
     return {"mean": {m: merged.mean(m) for m in METHODS}, "by_category": by_category,
@@ -66,25 +63,29 @@ def summarise(folds: list[dict]) -> dict:
 def family_cv(config: TrainConfig, cache: Path, corpus: Path, folds: int, out: Path, workers: int,
               report: Callable[[int, int], None]) -> dict:
     """Run every fold (see the module docstring); report(steps done, steps in all) as training goes. Returns
-    {"folds": [...], "summary": {...}} and writes nothing but each fold's model and log under `out`."""
+    {"folds": [facts...], "assets": [row...], "summary": {...}} and writes nothing but each fold's model and log
+    under `out`."""
     groups = family_folds(corpus, "train", folds)
     done, reported = [0] * folds, -1
     context = multiprocessing.get_context("spawn")  # torch in a forked child of a process that used it can hang
     with context.Manager() as manager, ProcessPoolExecutor(workers, mp_context=context) as pool:
         progress = manager.Queue()
         pending: set[Future] = {pool.submit(run_fold, k, g, config, cache, corpus, out, progress) for k, g in enumerate(groups)}
-        results: list[dict] = []
+        results: list[tuple[dict, SkinEvaluation]] = []
         while pending:
             finished, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
             results.extend(f.result() for f in finished)
             try:
                 while True:
-                    fold, step, _total = progress.get_nowait()
+                    fold, step = progress.get_nowait()
                     done[fold] = step
             except queue.Empty:
                 pass
             if sum(done) != reported:  # one report per change (a plain log gets one line each)
                 reported = sum(done)
                 report(reported, folds * config.steps)
-    results.sort(key=lambda r: r["fold"])
-    return {"folds": results, "summary": summarise(results)}
+    results.sort(key=lambda r: r[0]["fold"])
+    merged = SkinEvaluation([row for _, evaluation in results for row in evaluation.rows],
+                            {k: v for _, evaluation in results for k, v in evaluation.skipped.items()})
+    return {"folds": [facts for facts, _ in results], "assets": [r.to_dict() for r in merged.rows],
+            "summary": summarise(merged)}

@@ -45,7 +45,7 @@ class TrainConfig:
     device: str = "cpu"  # "cuda" trains on the GPU (samples are moved there once)
     forward_samples: int = 1  # samples per forward pass (0: the whole batch); one at a time keeps a CPU's cache warm
     ema: float = 0.0  # > 0: validate and save an exponential moving average of the weights with this decay per step
-    exclude: tuple[str, ...] = ()  # training characters left out (held-out families: bench/skin_family_cv.py)
+    exclude: tuple[str, ...] = ()  # training characters left out (held-out families: skin_family_cv.py)
     model: ModelConfig = field(default_factory=ModelConfig)
 
 

@@ -9,7 +9,9 @@ from pathlib import Path
 
 import pytest
 from rich.console import Console
+from typer.testing import CliRunner
 
+from cli.main import app
 from cli.train_skin_cv import render
 from simcore.errors import InvalidInput
 from simcore.evaluation.assets import family_folds, read_families
@@ -62,10 +64,30 @@ def test_every_train_character_is_scored_once_by_a_model_that_never_saw_it(tmp_p
     assert sorted(sum(held, [])) == ["a1", "a2", "b1", "c1"] and ["a1", "a2"] in held
     for fold in result["folds"]:
         assert fold["train_samples"] == 2 * (4 - len(fold["held_out"]))
-        assert {(r["name"], r["method"]) for r in fold["assets"]} == {(n, m) for n in fold["held_out"] for m in ("learned", "geodesic")}
+        assert fold["mean"]["learned"]["assets"] == fold["mean"]["geodesic"]["assets"] == len(fold["held_out"])
+    scored = sorted((r["name"], r["method"]) for r in result["assets"])
+    assert scored == sorted((n, m) for n in ("a1", "a2", "b1", "c1") for m in ("learned", "geodesic"))
     summary = result["summary"]
     assert summary["compared"] == 4 and not summary["errors"] and summary["mean"]["learned"]["assets"] == 4
     assert reports[-1] == (6, 6) and len(reports) == len(set(reports))  # one report per change
     out = io.StringIO()
     render(result, Console(file=out, width=160))
     assert "of 4 held-out characters" in out.getvalue() and "ALL (humanoid)" in out.getvalue()
+
+
+def test_eval_skin_scores_the_model_it_is_given(tmp_path: Path) -> None:
+    """`eval skin --model PATH` reaches the model loader: a corrupt file fails the learned rows with its code,
+    while the shipped model skins the same rig."""
+    import json
+
+    root = corpus(tmp_path, [("a1", "train", "family=fa")])
+    corrupt = tmp_path / "corrupt.safetensors"
+    corrupt.write_bytes(b"not a safetensors file")
+    rows = {}
+    for label, extra in (("shipped", []), ("corrupt", ["--model", str(corrupt)])):
+        out = tmp_path / f"{label}.json"
+        result = CliRunner().invoke(app, ["eval", "skin", str(root / "rigged"), "--method", "learned", "--json", str(out), *extra])
+        assert result.exit_code == 0, result.output
+        rows[label] = json.loads(out.read_text())["assets"]
+    assert "error" not in rows["shipped"][0] and rows["shipped"][0]["l1"] is not None
+    assert rows["corrupt"][0]["error"].startswith("model_unavailable")
