@@ -63,7 +63,9 @@ def medial_voxels(grid: VoxelGrid, restore_limbs: bool = False) -> tuple[np.ndar
             thin[idx] = True
     restored = 0
     if restore_limbs:
-        thin, restored = restore_lost_limbs(occupancy, thin, dist)
+        flip = (slice(None, None, -1),) * 3
+        reflected = skeletonize(occupancy[flip]).astype(bool)[flip]
+        thin, restored = restore_lost_limbs(occupancy, thin, dist, reflected)
     ijk = np.argwhere(thin).astype(np.int64)
     return ijk, dist[tuple(ijk.T)] * grid.pitch, restored
 
