@@ -16,6 +16,9 @@ from rich.table import Table
 
 from cli.eval_output import print_table_and_problems, write_report_json
 
+PRIOR_SHARE_HELP = ("the geodesic prior's share in the learned weights (default: the shipped one, "
+                    "simcore/skinning/learned.py PRIOR_SHARE; 0: the model alone)")
+
 if TYPE_CHECKING:  # the evaluation imports torch: loaded when the command runs, not with every `rigforge` call
     from simcore.evaluation.skin_eval import SkinEvaluation, SkinRow
 
@@ -91,14 +94,17 @@ def eval_skin(
     model: Annotated[Path | None, typer.Option(exists=True, dir_okay=False,
                                                help="learned skinning weights (.safetensors) to score instead of the shipped ones, "
                                                     "e.g. a fresh `rigforge train skin` output")] = None,
+    prior_share: Annotated[float | None, typer.Option(min=0.0, max=1.0, help=PRIOR_SHARE_HELP)] = None,
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
     from simcore.evaluation.skin_eval import OUR_METHODS, evaluate_skinning
+    from simcore.skinning.learned import PRIOR_SHARE, WEIGHTS, LearnedSkinning
 
     methods = [m for m in OUR_METHODS if m != "auto"] if method == "all" else [method]
     console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:
-        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split, learned_model=model,
+        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split,
+                                   learned=LearnedSkinning(model or WEIGHTS, PRIOR_SHARE if prior_share is None else prior_share),
                                    on_asset=lambda n: status.update(f"skinning {n}"))
     render(report, console)
     write_report_json(console, json_path, report.to_dict())

@@ -17,7 +17,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from cli.eval_skin import METRIC_HEADS, metric_cells
+from cli.eval_skin import METRIC_HEADS, PRIOR_SHARE_HELP, metric_cells
 from cli.progress import count_bar
 from cli.train import DEFAULT_CONFIG, ConfigOption, read_config, train_section
 
@@ -50,10 +50,12 @@ def skin_cv(
     steps: Annotated[int | None, typer.Option(min=1, help="training steps per fold (default: the config's)")] = None,
     workers: Annotated[int, typer.Option(min=1, help="folds trained at once (processes)")] = 1,
     out: Annotated[Path, typer.Option(help="folder for the fold models, logs and cv.json")] = Path(".rigforge-train/skin_cv"),
+    prior_share: Annotated[float | None, typer.Option(min=0.0, max=1.0, help=PRIOR_SHARE_HELP)] = None,
 ) -> None:
     """Cross-validate the skinning recipe by source family: every train character scored by a model that never
     saw its family, beside the geodesic method."""
     from simcore.skinning.attention_model import ModelConfig
+    from simcore.skinning.learned import PRIOR_SHARE
     from simcore.training.skin_family_cv import family_cv
     from simcore.training.skin_train import TrainConfig
 
@@ -65,7 +67,8 @@ def skin_cv(
     out.mkdir(parents=True, exist_ok=True)
     with count_bar("training folds") as update:
         result = family_cv(train, Path(spec["cache"]), corpus, folds, out, workers,
-                           lambda done, total: update("", done, total))
+                           lambda done, total: update("", done, total),
+                           PRIOR_SHARE if prior_share is None else prior_share)
     console = Console() if Console().is_terminal else Console(width=150)
     render(result, console)
     (out / "cv.json").write_text(json.dumps(result, indent=1))

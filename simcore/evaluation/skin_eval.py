@@ -32,7 +32,7 @@ from simcore.io.gltf_rig import RiggedAsset, root_holds_weight, weightless_joint
 from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
-from simcore.skinning.learned import WEIGHTS as LEARNED_WEIGHTS
+from simcore.skinning.learned import LearnedSkinning
 from simcore.skinning.predict import compute_weights
 
 OUR_METHODS = ("auto", "learned", "geodesic", "heat")
@@ -237,13 +237,13 @@ def evaluate_skinning(
     pipeline: bool = False,
     split: str | None = None,
     names: Collection[str] | None = None,
-    learned_model: Path | None = None,
+    learned: LearnedSkinning | None = None,
     on_asset: Callable[[str], None] | None = None,
 ) -> SkinEvaluation:
     """Skin every rigged asset in `directory` with each of our `methods`; score peers found under `peers`;
     with `pipeline`, add full-pipeline rows (our skeleton and weights vs the artist's rig); with `split`, only the
     files `directory`/MANIFEST.tsv lists for that split (the corpus layout); with `names`, only those assets;
-    `learned_model`: a weights file for the learned method (and `auto`) in place of the shipped one."""
+    `learned`: the learned method's (and `auto`'s) model file and prior share in place of the shipped ones."""
     for m in methods:
         if m not in OUR_METHODS:
             raise InvalidInput(f"unknown skinning method {m!r}; use {', '.join(OUR_METHODS)} or all", code="invalid_option", field="method")
@@ -261,7 +261,7 @@ def evaluate_skinning(
             try:
                 result = compute_weights(asset.vertices, asset.faces, asset.skeleton, method=method,  # type: ignore[arg-type]
                                          root_deforms=root_deforms, exclude=helpers,
-                                         learned_model=learned_model or LEARNED_WEIGHTS)
+                                         learned=learned or LearnedSkinning())
                 seconds = time.perf_counter() - started
                 metrics = score_weights(asset, result.weights, clips)
                 metrics["seconds"] = seconds

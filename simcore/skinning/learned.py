@@ -4,11 +4,18 @@ The model is read once per process (a worker loads it on its first job, never pe
 twice, as it is and turned half a turn about the up axis, and averages the two (TURNS; one pass on big meshes).
 Its file is a safetensors state dict whose metadata carries the network sizes and training summary; a missing or
 corrupt file raises ModelUnavailable with the path and the reason.
+
+The model's weights are then multiplied by the geodesic prior's (the falloff over the same candidate joints that
+the model also reads as a feature), each raised to its share, and the rows renormalised: a product of experts with
+PRIOR_SHARE for the prior. Where the model hesitates between joints the prior's distance through the solid
+decides, and where the prior spreads a vertex over several joints the model's sharper choice stays. The share is
+chosen on corpus `val` and checked by source family (README, Skinning); 0 gives the model's own weights.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
@@ -29,7 +36,26 @@ CHUNK = 1024  # vertices per forward pass: the (chunk, K, width) activations sta
 TURNS = (0.0, np.pi)
 TURN_PAIRS = 640_000
 PROGRESS_EVERY = 16  # chunks between progress reports
+PRIOR_SHARE = 0.15  # the geodesic prior's exponent in the product with the model's weights (module doc)
 ARMATURE_ROOT = "__armature_root__"
+
+
+@dataclass(frozen=True)
+class LearnedSkinning:
+    """What the learned method runs: the model's weights file and the geodesic prior's share (PRIOR_SHARE)."""
+
+    model: Path = WEIGHTS
+    prior_share: float = PRIOR_SHARE
+
+
+def with_prior(weights: np.ndarray, prior: np.ndarray, share: float) -> np.ndarray:
+    """(V, K) rows ∝ weights^(1 − share) · exp(prior)^share, summing to 1: the model's weights over the candidates
+    times the geodesic prior's (`prior`: its log-weights), each to its share; `share` 0 returns `weights`."""
+    if share <= 0.0:
+        return weights
+    log = (1.0 - share) * np.log(np.maximum(weights, 1e-12)) + share * prior
+    out = np.exp(log - log.max(axis=1, keepdims=True))
+    return out / out.sum(axis=1, keepdims=True)
 
 
 def learned_summary(path: Path = WEIGHTS) -> str:
@@ -56,9 +82,11 @@ def with_armature_root(vertices: np.ndarray, skeleton: Skeleton) -> Skeleton:
 
 def learned_weights(
     vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, *, model_path: Path = WEIGHTS,
-    progress: Callable[[float], None] = lambda fraction: None, root_deforms: bool = False,
+    prior_share: float = PRIOR_SHARE, progress: Callable[[float], None] = lambda fraction: None,
+    root_deforms: bool = False,
 ) -> np.ndarray:
-    """(V, J) float64 weights, rows summing to 1, predicted by the learned model.
+    """(V, J) float64 weights, rows summing to 1, predicted by the learned model and multiplied by the geodesic
+    prior to `prior_share` (see the module doc).
 
     root_deforms: the skeleton's root is a body joint that bends the mesh (our predicted skeletons) rather than
     an armature root; the model, which learned that artists leave the armature root unweighted, is then given
@@ -66,7 +94,7 @@ def learned_weights(
     """
     if root_deforms:
         out = learned_weights(vertices, faces, with_armature_root(vertices, skeleton), model_path=model_path,
-                              progress=progress)[:, 1:]
+                              prior_share=prior_share, progress=progress)[:, 1:]
         out[out.sum(axis=1) <= 0, 0] = 1.0  # a vertex the model gave wholly to the armature root: the body's root
         return out / out.sum(axis=1, keepdims=True)
     model = load_model(model_path)
@@ -86,6 +114,6 @@ def learned_weights(
                 if (start // CHUNK) % PROGRESS_EVERY == 0:
                     progress(0.7 + 0.3 * min(1.0, (k * count + start + CHUNK) / (len(turns) * count)))
     out = np.zeros((count, skeleton.num_joints))
-    np.put_along_axis(out, inputs.candidates, mean, axis=1)
+    np.put_along_axis(out, inputs.candidates, with_prior(mean, inputs.prior.astype(np.float64), prior_share), axis=1)
     progress(1.0)
     return out

@@ -15,6 +15,9 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         "Predicts per-vertex skinning weights for a mesh and a given skeleton (see simcore/skinning/attention_model.py).",
         "Inputs are each vertex's 16 geodesically nearest joints with distance and tree features (simcore/skinning/pair_features.py);",
         "the output refines the geodesic voxel binding's log-weights (an untrained model reproduces them).",
+        "In use (simcore/skinning/learned.py) its weights are multiplied by that prior's to the power PRIOR_SHARE, a product",
+        "of experts chosen on val (`--prior-share` of `rigforge eval skin` and `rigforge train skin-cv` tries others);",
+        "the val scores below are the model's own.",
     ]
     data = [
         corpus_line(data_config),

@@ -21,6 +21,7 @@ from typing import Any
 
 from simcore.evaluation.assets import family_folds
 from simcore.evaluation.skin_eval import SkinEvaluation, evaluate_skinning
+from simcore.skinning.learned import PRIOR_SHARE, LearnedSkinning
 from simcore.training.skin_train import TrainConfig, train_skin
 
 METHODS = ("learned", "geodesic")
@@ -28,9 +29,10 @@ POLL_S = 1.0
 
 
 def run_fold(fold: int, names: list[str], config: TrainConfig, cache: Path, corpus: Path, out: Path,
-             progress: Any = None) -> tuple[dict, SkinEvaluation]:
-    """Train without `names` (one fold's held-out characters), then skin them with that model and with geodesic.
-    `progress`: a queue that gets (fold, step) as training goes. Returns (the fold's facts, its evaluation)."""
+             prior_share: float = PRIOR_SHARE, progress: Any = None) -> tuple[dict, SkinEvaluation]:
+    """Train without `names` (one fold's held-out characters), then skin them with that model (its output times the
+    geodesic prior to `prior_share`, as learned.py does) and with geodesic. `progress`: a queue that gets
+    (fold, step) as training goes. Returns (the fold's facts, its evaluation)."""
     folder = out / f"fold_{fold}"
     folder.mkdir(parents=True, exist_ok=True)
     model = folder / "skin_attention.safetensors"
@@ -40,7 +42,8 @@ def run_fold(fold: int, names: list[str], config: TrainConfig, cache: Path, corp
             progress.put((fold, step))
 
     summary = train_skin(replace(config, exclude=tuple(names)), cache, model, folder / "log.jsonl", report)
-    evaluation = evaluate_skinning(corpus, list(METHODS), split="train", names=set(names), learned_model=model)
+    evaluation = evaluate_skinning(corpus, list(METHODS), split="train", names=set(names),
+                                   learned=LearnedSkinning(model, prior_share))
     facts = {"fold": fold, "held_out": names, "best_step": summary["best_step"], "trainer_val": summary["val"],
              "train_samples": summary["train_samples"], "mean": {m: evaluation.mean(m) for m in METHODS}}
     return facts, evaluation
@@ -61,7 +64,7 @@ def summarise(merged: SkinEvaluation) -> dict:
 
 
 def family_cv(config: TrainConfig, cache: Path, corpus: Path, folds: int, out: Path, workers: int,
-              report: Callable[[int, int], None]) -> dict:
+              report: Callable[[int, int], None], prior_share: float = PRIOR_SHARE) -> dict:
     """Run every fold (see the module docstring); report(steps done, steps in all) as training goes. Returns
     {"folds": [facts...], "assets": [row...], "summary": {...}} and writes nothing but each fold's model and log
     under `out`."""
@@ -70,7 +73,7 @@ def family_cv(config: TrainConfig, cache: Path, corpus: Path, folds: int, out: P
     context = multiprocessing.get_context("spawn")  # torch in a forked child of a process that used it can hang
     with context.Manager() as manager, ProcessPoolExecutor(workers, mp_context=context) as pool:
         progress = manager.Queue()
-        pending: set[Future] = {pool.submit(run_fold, k, g, config, cache, corpus, out, progress) for k, g in enumerate(groups)}
+        pending: set[Future] = {pool.submit(run_fold, k, g, config, cache, corpus, out, prior_share, progress) for k, g in enumerate(groups)}
         results: list[tuple[dict, SkinEvaluation]] = []
         while pending:
             finished, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)

@@ -11,6 +11,7 @@ from simcore.metrics.skinning import weight_stats
 from simcore.skeleton.types import Skeleton
 from simcore.skinning import predict
 from simcore.skinning.geodesic import geodesic_distances
+from simcore.skinning.learned import LearnedSkinning
 from simcore.skinning.predict import Method, compute_weights
 from tests.meshes import joined
 
@@ -59,7 +60,7 @@ def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method
 
 def test_auto_falls_back_to_the_hand_written_methods_without_the_model(bent_tube, tmp_path) -> None:
     v, f, skeleton = bent_tube
-    result = compute_weights(v, f, skeleton, method="auto", learned_model=tmp_path / "nowhere.safetensors")
+    result = compute_weights(v, f, skeleton, method="auto", learned=LearnedSkinning(tmp_path / "nowhere.safetensors"))
     assert set(result.scores) == {"geodesic", "heat"} and result.method in {"geodesic", "heat"}
     assert "nowhere.safetensors" in result.reason
 
@@ -197,13 +198,17 @@ def test_armature_root_sits_below_the_root_and_adopts_it(bent_tube) -> None:
 
 
 def test_a_deforming_root_keeps_its_share_under_the_learned_model(bent_tube) -> None:
+    """The model's own weights give a deforming root more of the lower tube; the geodesic prior, which weights
+    every root alike, leaves it still gaining."""
     v, f, skeleton = bent_tube
-    plain = compute_weights(v, f, skeleton, method="learned").weights.toarray()
-    body = compute_weights(v, f, skeleton, method="learned", root_deforms=True).weights.toarray()
-    assert body.shape == plain.shape
-    np.testing.assert_allclose(body.sum(axis=1), 1.0, atol=1e-5)
-    _dominant_joint_near_bones(v, skeleton, body)
-    assert body[:, 0].sum() > 1.05 * plain[:, 0].sum()  # the root bends the lower tube: it gains weight
+    for share, gain in ((0.0, 1.05), (LearnedSkinning().prior_share, 1.0)):
+        plain = compute_weights(v, f, skeleton, method="learned", learned=LearnedSkinning(prior_share=share)).weights.toarray()
+        body = compute_weights(v, f, skeleton, method="learned", root_deforms=True,
+                               learned=LearnedSkinning(prior_share=share)).weights.toarray()
+        assert body.shape == plain.shape
+        np.testing.assert_allclose(body.sum(axis=1), 1.0, atol=1e-5)
+        _dominant_joint_near_bones(v, skeleton, body)
+        assert body[:, 0].sum() > gain * plain[:, 0].sum()  # the root bends the lower tube: it gains weight
 
 
 def test_the_learned_model_averages_the_character_and_its_half_turn(bent_tube, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -218,13 +223,34 @@ def test_the_learned_model_averages_the_character_and_its_half_turn(bent_tube, m
     np.testing.assert_allclose(back.point[:, :3], inputs.point[:, :3] * [-1, 1, -1], atol=1e-6)
     np.testing.assert_allclose(back.bone[:, 3:6], inputs.bone[:, 3:6] * [-1, 1, -1], atol=1e-6)
     np.testing.assert_array_equal(back.pair, inputs.pair)
-    both = learned.learned_weights(v, f, skeleton)
+    both = learned.learned_weights(v, f, skeleton, prior_share=0.0)
     monkeypatch.setattr(learned, "TURNS", (0.0,))
-    front = learned.learned_weights(v, f, skeleton)
+    front = learned.learned_weights(v, f, skeleton, prior_share=0.0)
     monkeypatch.setattr(learned, "TURNS", (np.pi,))
-    behind = learned.learned_weights(v, f, skeleton)
+    behind = learned.learned_weights(v, f, skeleton, prior_share=0.0)
     assert np.abs(front - behind).max() > 1e-3  # the turn changes what the model reads
     np.testing.assert_allclose(both, 0.5 * (front + behind), atol=1e-9)
     monkeypatch.setattr(learned, "TURNS", (0.0, np.pi))
     monkeypatch.setattr(learned, "TURN_PAIRS", inputs.candidates.size - 1)
-    np.testing.assert_allclose(learned.learned_weights(v, f, skeleton), front, atol=1e-12)
+    np.testing.assert_allclose(learned.learned_weights(v, f, skeleton, prior_share=0.0), front, atol=1e-12)
+
+
+def test_the_learned_weights_are_multiplied_by_the_geodesic_prior_to_its_share(bent_tube) -> None:
+    """Each vertex's weights ∝ model^(1 − s) · prior^s over its candidate joints; s = 0 is the model alone, s = 1
+    the geodesic prior the model reads."""
+    from simcore.skinning import learned
+    from simcore.skinning.pair_features import skin_inputs
+
+    v, f, skeleton = bent_tube
+    inputs = skin_inputs(v, f, skeleton)
+    alone = learned.learned_weights(v, f, skeleton, prior_share=0.0)
+    mixed = learned.learned_weights(v, f, skeleton, prior_share=0.3)
+    np.testing.assert_allclose(mixed.sum(axis=1), 1.0, atol=1e-9)
+    model = np.take_along_axis(alone, inputs.candidates, axis=1)
+    prior = np.exp(inputs.prior.astype(np.float64))
+    expected = np.maximum(model, 1e-12) ** 0.7 * prior ** 0.3
+    np.testing.assert_allclose(np.take_along_axis(mixed, inputs.candidates, axis=1),
+                               expected / expected.sum(axis=1, keepdims=True), atol=1e-6)
+    only_prior = np.take_along_axis(learned.learned_weights(v, f, skeleton, prior_share=1.0), inputs.candidates, axis=1)
+    np.testing.assert_allclose(only_prior, prior / prior.sum(axis=1, keepdims=True), atol=1e-6)
+    assert np.abs(mixed - alone).max() > 1e-3  # the prior moves the weights
