@@ -9,7 +9,7 @@ The model's weights are then multiplied by the geodesic prior's (the falloff ove
 the model also reads as a feature), each raised to its share, and the rows renormalised: a product of experts with
 PRIOR_SHARE for the prior. Where the model hesitates between joints the prior's distance through the solid
 decides, and where the prior spreads a vertex over several joints the model's sharper choice stays. The share is
-chosen on corpus `val` and checked by source family (README, Skinning); 0 gives the model's own weights.
+chosen by held-out source family (`rigforge train skin-cv`; README, Skinning); 0 gives the model's own weights.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         "Inputs are each vertex's 16 geodesically nearest joints with distance and tree features (simcore/skinning/pair_features.py);",
         "the output refines the geodesic voxel binding's log-weights (an untrained model reproduces them).",
         "In use (simcore/skinning/learned.py) its weights are multiplied by that prior's to the power PRIOR_SHARE, a product",
-        "of experts chosen on val (`--prior-share` of `rigforge eval skin` and `rigforge train skin-cv` tries others);",
+        "of experts chosen by held-out family (`--prior-share` of `rigforge eval skin` and `rigforge train skin-cv` tries others);",
         "the val scores below are the model's own.",
     ]
     data = [
