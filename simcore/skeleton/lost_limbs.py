@@ -7,12 +7,6 @@ at most 0 inside the medial balls, growing beyond them. A connected region of po
 limb when it reaches farther beyond the balls than LENGTH_RATIO × its own radius (an elongated protrusion)
 and is at least MIN_RADIUS voxels thick. A shallow cap over a blob's end, where thinning legitimately stops
 short, reaches only about twice its own depth, and the thin tips of ears and fingers are below MIN_RADIUS.
-
-Lee thinning peels the six directions in a fixed order, so which of two mirror-image limbs it erases depends
-on which side it faces: a capsule's arms a few voxels across keep their line on one side and lose it on the
-other. A thinner region (down to TIP_RADIUS) is therefore also a limb when the thinning of the point-reflected
-solid, whose peeling order faces the other way, keeps a line in it reaching beyond the balls farther than
-LENGTH_RATIO × the region's radius: one limb of a mirror pair is then not kept while its twin loses its bones.
 A lost limb's medial line is the deepest path from its far end back to the medial voxels, stopped a radius
 short of the tip as thinning stops. Measured along the solid, not in a straight line, so a leg beside
 another leg is not taken for part of it.
@@ -29,16 +23,14 @@ from simcore.geometry.voxel_paths import VoxelPaths
 
 REGION_EXCESS = 1.5  # voxels beyond the medial balls where a region starts (voxel rounding stays below)
 LENGTH_RATIO = 3.0  # a region reaching farther than this × its radius beyond the balls is a limb
-MIN_RADIUS = 4.0  # voxels: thinner regions are limbs only when the reflected thinning keeps them
-TIP_RADIUS = 2.0  # voxels: thinner regions (ear and finger tips) are left to the tip handling
+MIN_RADIUS = 2.0  # voxels: thinner regions (ear and finger tips) are left to the tip handling
 
 
-def lost_limb_tips(paths: VoxelPaths, depth: np.ndarray, medial: np.ndarray, reflected: np.ndarray) -> np.ndarray:
+def lost_limb_tips(paths: VoxelPaths, depth: np.ndarray, medial: np.ndarray) -> np.ndarray:
     """The far ends of the lost limbs.
 
     paths: the solid's voxels (pitch 1, so distances are in voxels); depth: (n,) each voxel's distance to the
-    outside, voxels; medial: (m,) voxel ids of the thinned voxels; reflected: (n,) bool, the voxels the
-    point-reflected solid's thinning keeps. Returns (k,) tip voxel ids.
+    outside, voxels; medial: (m,) voxel ids of the thinned voxels. Returns (k,) tip voxel ids.
     """
     top = float(depth.max())
     # One search from every medial voxel at once, started at top - radius so the result minus top is the excess.
@@ -54,27 +46,22 @@ def lost_limb_tips(paths: VoxelPaths, depth: np.ndarray, medial: np.ndarray, ref
     for members in (order[a:b] for a, b in zip(starts[:-1], starts[1:])):
         reach = float(excess[members].max())
         radius = float(depth[members[excess[members] > 0.5 * reach]].max())  # the outer half: the limb's own
-        elongated = radius >= MIN_RADIUS and reach > LENGTH_RATIO * radius
-        line = excess[members[reflected[members]]]
-        kept_reflected = radius >= TIP_RADIUS and len(line) > 0 and float(line.max()) > LENGTH_RATIO * radius
-        if elongated or kept_reflected:
+        if radius >= MIN_RADIUS and reach > LENGTH_RATIO * radius:
             tips.append(int(members[np.argmax(excess[members])]))
     return np.asarray(tips, np.int64)
 
 
-def restore_lost_limbs(occupancy: np.ndarray, thin: np.ndarray, depth: np.ndarray,
-                       reflected: np.ndarray) -> tuple[np.ndarray, int]:
+def restore_lost_limbs(occupancy: np.ndarray, thin: np.ndarray, depth: np.ndarray) -> tuple[np.ndarray, int]:
     """`thin` (X, Y, Z) bool with the medial lines of lost limbs added, and how many were restored.
 
-    occupancy: the solid; thin: its thinned voxels; depth: (X, Y, Z) distance to the outside in voxels;
-    reflected: (X, Y, Z) bool, the thinning of the point-reflected solid mapped back (see the module doc).
+    occupancy: the solid; thin: its thinned voxels; depth: (X, Y, Z) distance to the outside in voxels.
     """
     paths = VoxelPaths(occupancy, 1.0)
     medial = paths.ids[thin & occupancy]
     if len(medial) == 0:
         return thin, 0
     voxel_depth = depth[tuple(paths.ijk.T)]
-    tips = lost_limb_tips(paths, voxel_depth, medial, reflected[tuple(paths.ijk.T)])
+    tips = lost_limb_tips(paths, voxel_depth, medial)
     if len(tips) == 0:
         return thin, 0
     graph = voxel_graph(paths.ijk, weight_scale=voxel_depth**2)  # deep voxels are cheap: the path stays centred

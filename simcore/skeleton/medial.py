@@ -63,9 +63,7 @@ def medial_voxels(grid: VoxelGrid, restore_limbs: bool = False) -> tuple[np.ndar
             thin[idx] = True
     restored = 0
     if restore_limbs:
-        flip = (slice(None, None, -1),) * 3
-        reflected = skeletonize(occupancy[flip]).astype(bool)[flip]
-        thin, restored = restore_lost_limbs(occupancy, thin, dist, reflected)
+        thin, restored = restore_lost_limbs(occupancy, thin, dist)
     ijk = np.argwhere(thin).astype(np.int64)
     return ijk, dist[tuple(ijk.T)] * grid.pitch, restored
 

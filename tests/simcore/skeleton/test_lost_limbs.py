@@ -34,10 +34,8 @@ def _line(x0: int, x1: int) -> np.ndarray:
     return thin
 
 
-def _restore(occupancy: np.ndarray, thin: np.ndarray, reflected: np.ndarray | None = None) -> tuple[np.ndarray, int]:
-    """restore_lost_limbs with `thin` as what both thinnings kept unless `reflected` says otherwise."""
-    reflected = thin if reflected is None else reflected
-    return restore_lost_limbs(occupancy, thin, ndimage.distance_transform_edt(occupancy), reflected)
+def _restore(occupancy: np.ndarray, thin: np.ndarray) -> tuple[np.ndarray, int]:
+    return restore_lost_limbs(occupancy, thin, ndimage.distance_transform_edt(occupancy))
 
 
 def test_a_limb_without_medial_voxels_gets_a_connected_line_stopped_a_radius_short_of_its_tip():
@@ -61,18 +59,6 @@ def test_a_blob_end_and_a_thin_tip_are_not_taken_for_limbs():
     # A spike one voxel thick (an ear tip): left to the tip handling, however long.
     spike = _ball((22, 30, 30), 14) | _rod(22, 70, 1)
     assert _restore(spike, _line(20, 24))[1] == 0
-
-
-def test_a_thinner_limb_is_restored_only_where_the_reflected_thinning_keeps_its_line():
-    """An arm 3 voxels thick, below MIN_RADIUS: erased by one peeling order and kept by the reflected one (as Lee
-    thinning treats a capsule's two arms), it gets its line back; a protrusion no thinning keeps does not."""
-    occupancy = _ball((22, 30, 30), 14) | _rod(22, 60, 3)
-    erased, kept = _line(20, 24), _line(20, 57)
-    restored, count = _restore(occupancy, erased, reflected=kept)
-    assert count == 1 and np.argwhere(restored & ~erased)[:, 0].max() >= 55
-    assert _restore(occupancy, erased, reflected=erased)[1] == 0
-    spike = _ball((22, 30, 30), 14) | _rod(22, 70, 1)  # thinner than TIP_RADIUS: left to the tip handling
-    assert _restore(spike, _line(20, 24), reflected=_line(20, 68))[1] == 0
 
 
 def test_limbs_already_thinned_are_left_as_they_are():
