@@ -98,13 +98,13 @@ def eval_skin(
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
     from simcore.evaluation.skin_eval import OUR_METHODS, evaluate_skinning
-    from simcore.skinning.learned import PRIOR_SHARE, WEIGHTS, LearnedSkinning
+    from simcore.skinning.learned import SHIPPED
 
     methods = [m for m in OUR_METHODS if m != "auto"] if method == "all" else [method]
     console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:
         report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split,
-                                   learned=LearnedSkinning(model or WEIGHTS, PRIOR_SHARE if prior_share is None else prior_share),
+                                   learned=SHIPPED.overridden(model, prior_share),
                                    on_asset=lambda n: status.update(f"skinning {n}"))
     render(report, console)
     write_report_json(console, json_path, report.to_dict())

@@ -55,7 +55,6 @@ def skin_cv(
     """Cross-validate the skinning recipe by source family: every train character scored by a model that never
     saw its family, beside the geodesic method."""
     from simcore.skinning.attention_model import ModelConfig
-    from simcore.skinning.learned import PRIOR_SHARE
     from simcore.training.skin_family_cv import family_cv
     from simcore.training.skin_train import TrainConfig
 
@@ -67,8 +66,7 @@ def skin_cv(
     out.mkdir(parents=True, exist_ok=True)
     with count_bar("training folds") as update:
         result = family_cv(train, Path(spec["cache"]), corpus, folds, out, workers,
-                           lambda done, total: update("", done, total),
-                           PRIOR_SHARE if prior_share is None else prior_share)
+                           lambda done, total: update("", done, total), prior_share)
     console = Console() if Console().is_terminal else Console(width=150)
     render(result, console)
     (out / "cv.json").write_text(json.dumps(result, indent=1))

@@ -32,7 +32,7 @@ from simcore.io.gltf_rig import RiggedAsset, root_holds_weight, weightless_joint
 from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.bones import closest_on_segments, joint_segments
-from simcore.skinning.learned import LearnedSkinning
+from simcore.skinning.learned import SHIPPED, LearnedSkinning
 from simcore.skinning.predict import compute_weights
 
 OUR_METHODS = ("auto", "learned", "geodesic", "heat")
@@ -237,7 +237,7 @@ def evaluate_skinning(
     pipeline: bool = False,
     split: str | None = None,
     names: Collection[str] | None = None,
-    learned: LearnedSkinning | None = None,
+    learned: LearnedSkinning = SHIPPED,
     on_asset: Callable[[str], None] | None = None,
 ) -> SkinEvaluation:
     """Skin every rigged asset in `directory` with each of our `methods`; score peers found under `peers`;
@@ -261,7 +261,7 @@ def evaluate_skinning(
             try:
                 result = compute_weights(asset.vertices, asset.faces, asset.skeleton, method=method,  # type: ignore[arg-type]
                                          root_deforms=root_deforms, exclude=helpers,
-                                         learned=learned or LearnedSkinning())
+                                         learned=learned)
                 seconds = time.perf_counter() - started
                 metrics = score_weights(asset, result.weights, clips)
                 metrics["seconds"] = seconds

@@ -15,7 +15,7 @@ chosen by held-out source family (`rigforge train skin-cv`; README, Skinning); 0
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -47,6 +47,14 @@ class LearnedSkinning:
     model: Path = WEIGHTS
     prior_share: float = PRIOR_SHARE
 
+    def overridden(self, model: Path | None = None, prior_share: float | None = None) -> LearnedSkinning:
+        """This choice with `model` and `prior_share` replaced where given (a command's options)."""
+        return replace(self, model=self.model if model is None else model,
+                       prior_share=self.prior_share if prior_share is None else prior_share)
+
+
+SHIPPED = LearnedSkinning()  # the learned method as jobs run it: the model file in the repo and PRIOR_SHARE
+
 
 def with_prior(weights: np.ndarray, prior: np.ndarray, share: float) -> np.ndarray:
     """(V, K) rows ∝ weights^(1 − share) · exp(prior)^share, summing to 1: the model's weights over the candidates
@@ -58,12 +66,14 @@ def with_prior(weights: np.ndarray, prior: np.ndarray, share: float) -> np.ndarr
     return out / out.sum(axis=1, keepdims=True)
 
 
-def learned_summary(path: Path = WEIGHTS) -> str:
-    """One line for reports: why `auto` takes the learned model (its val figures beside the geodesic prior's)."""
-    summary = read_metadata(path, "skinning", "skinning")["summary"]
+def learned_summary(learned: LearnedSkinning = SHIPPED) -> str:
+    """One line for reports: why `auto` takes the learned model (its val figures beside the geodesic prior's) and
+    the prior's share in what it runs."""
+    summary = read_metadata(learned.model, "skinning", "skinning")["summary"]
     val, start = summary["val"], summary["val_at_start"]
     return (f"learned model: corpus val L1 {val['l1']:.3f} vs {start['l1']:.3f} for the geodesic prior it refines, "
-            f"deformation {val['deform']:.4f} vs {start['deform']:.4f}")
+            f"deformation {val['deform']:.4f} vs {start['deform']:.4f}; its weights times the prior's to the share "
+            f"{learned.prior_share:g}")
 
 
 @lru_cache(maxsize=4)
@@ -81,23 +91,22 @@ def with_armature_root(vertices: np.ndarray, skeleton: Skeleton) -> Skeleton:
 
 
 def learned_weights(
-    vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, *, model_path: Path = WEIGHTS,
-    prior_share: float = PRIOR_SHARE, progress: Callable[[float], None] = lambda fraction: None,
-    root_deforms: bool = False,
+    vertices: np.ndarray, faces: np.ndarray, skeleton: Skeleton, *, learned: LearnedSkinning = SHIPPED,
+    progress: Callable[[float], None] = lambda fraction: None, root_deforms: bool = False,
 ) -> np.ndarray:
-    """(V, J) float64 weights, rows summing to 1, predicted by the learned model and multiplied by the geodesic
-    prior to `prior_share` (see the module doc).
+    """(V, J) float64 weights, rows summing to 1, predicted by `learned.model` and multiplied by the geodesic
+    prior to `learned.prior_share` (see the module doc).
 
     root_deforms: the skeleton's root is a body joint that bends the mesh (our predicted skeletons) rather than
     an armature root; the model, which learned that artists leave the armature root unweighted, is then given
     one above it (`with_armature_root`) and its column is dropped.
     """
     if root_deforms:
-        out = learned_weights(vertices, faces, with_armature_root(vertices, skeleton), model_path=model_path,
-                              prior_share=prior_share, progress=progress)[:, 1:]
+        out = learned_weights(vertices, faces, with_armature_root(vertices, skeleton), learned=learned,
+                              progress=progress)[:, 1:]
         out[out.sum(axis=1) <= 0, 0] = 1.0  # a vertex the model gave wholly to the armature root: the body's root
         return out / out.sum(axis=1, keepdims=True)
-    model = load_model(model_path)
+    model = load_model(learned.model)
     inputs = skin_inputs(vertices, faces, skeleton, progress=lambda f: progress(0.7 * f))
     turns = TURNS if inputs.candidates.size <= TURN_PAIRS else TURNS[:1]
     count = len(inputs.candidates)
@@ -114,6 +123,6 @@ def learned_weights(
                 if (start // CHUNK) % PROGRESS_EVERY == 0:
                     progress(0.7 + 0.3 * min(1.0, (k * count + start + CHUNK) / (len(turns) * count)))
     out = np.zeros((count, skeleton.num_joints))
-    np.put_along_axis(out, inputs.candidates, with_prior(mean, inputs.prior.astype(np.float64), prior_share), axis=1)
+    np.put_along_axis(out, inputs.candidates, with_prior(mean, inputs.prior.astype(np.float64), learned.prior_share), axis=1)
     progress(1.0)
     return out

@@ -23,7 +23,7 @@ from simcore.model_weights import ModelUnavailable
 from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.geodesic import geodesic_weights
 from simcore.skinning.heat import heat_weights
-from simcore.skinning.learned import LearnedSkinning, learned_summary, learned_weights
+from simcore.skinning.learned import SHIPPED, LearnedSkinning, learned_summary, learned_weights
 from simcore.skinning.mirror_weights import weight_mirror
 from simcore.skinning.parts import bind_rigid_parts
 from simcore.skinning.postprocess import SMOOTH_ITERATIONS, normalize_rows, smooth_on_surface, top_k
@@ -46,7 +46,6 @@ MAX_ENTRIES = 100_000_000
 PROGRESS_POLL_S = 0.25  # how often `auto`'s caller hears the methods' progress (and can cancel)
 SMOOTH_STRENGTH = 0.25  # per pass: evens out voxel-grid steps while keeping weights as sharp as artists' are
 SMOOTH_REACH = 1 / 16  # × the model size: edges up to this long count fully in the smoothing (8 geodesic-grid voxels)
-SHIPPED = LearnedSkinning()  # the learned method as shipped: the model file in the repo and PRIOR_SHARE
 
 
 @dataclass
@@ -122,7 +121,7 @@ def compute_weights(
     reason, use_learned = "", False
     if method == "auto":
         try:
-            reason, use_learned = learned_summary(learned.model), True
+            reason, use_learned = learned_summary(learned), True
         except ModelUnavailable as exc:
             reason = f"{exc}; chose the hand-written method with the best unsupervised score"
     v, f = _check_inputs(vertices, faces, skeleton, max_influences)
@@ -140,8 +139,7 @@ def compute_weights(
 
     def run(name: str, step: Callable[[float], None]) -> tuple[sp.csr_matrix, dict[str, float]]:
         started = time.perf_counter()
-        extra: dict = {"model_path": learned.model, "prior_share": learned.prior_share,
-                       "root_deforms": root_deforms} if name == "learned" else {}
+        extra: dict = {"learned": learned, "root_deforms": root_deforms} if name == "learned" else {}
         dense = METHODS[name](v, f, skeleton, progress=lambda fraction: step(0.8 * fraction), **extra)
         if helpers.any():  # a helper owns no bone, but a method may still leave it a trace (a far learned candidate)
             dense[:, helpers] = 0.0

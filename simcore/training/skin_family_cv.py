@@ -21,7 +21,7 @@ from typing import Any
 
 from simcore.evaluation.assets import family_folds
 from simcore.evaluation.skin_eval import SkinEvaluation, evaluate_skinning
-from simcore.skinning.learned import PRIOR_SHARE, LearnedSkinning
+from simcore.skinning.learned import SHIPPED
 from simcore.training.skin_train import TrainConfig, train_skin
 
 METHODS = ("learned", "geodesic")
@@ -29,9 +29,9 @@ POLL_S = 1.0
 
 
 def run_fold(fold: int, names: list[str], config: TrainConfig, cache: Path, corpus: Path, out: Path,
-             prior_share: float = PRIOR_SHARE, progress: Any = None) -> tuple[dict, SkinEvaluation]:
+             prior_share: float | None = None, progress: Any = None) -> tuple[dict, SkinEvaluation]:
     """Train without `names` (one fold's held-out characters), then skin them with that model (its output times the
-    geodesic prior to `prior_share`, as learned.py does) and with geodesic. `progress`: a queue that gets
+    geodesic prior to `prior_share`, None: the shipped share) and with geodesic. `progress`: a queue that gets
     (fold, step) as training goes. Returns (the fold's facts, its evaluation)."""
     folder = out / f"fold_{fold}"
     folder.mkdir(parents=True, exist_ok=True)
@@ -43,7 +43,7 @@ def run_fold(fold: int, names: list[str], config: TrainConfig, cache: Path, corp
 
     summary = train_skin(replace(config, exclude=tuple(names)), cache, model, folder / "log.jsonl", report)
     evaluation = evaluate_skinning(corpus, list(METHODS), split="train", names=set(names),
-                                   learned=LearnedSkinning(model, prior_share))
+                                   learned=SHIPPED.overridden(model, prior_share))
     facts = {"fold": fold, "held_out": names, "best_step": summary["best_step"], "trainer_val": summary["val"],
              "train_samples": summary["train_samples"], "mean": {m: evaluation.mean(m) for m in METHODS}}
     return facts, evaluation
@@ -64,7 +64,7 @@ def summarise(merged: SkinEvaluation) -> dict:
 
 
 def family_cv(config: TrainConfig, cache: Path, corpus: Path, folds: int, out: Path, workers: int,
-              report: Callable[[int, int], None], prior_share: float = PRIOR_SHARE) -> dict:
+              report: Callable[[int, int], None], prior_share: float | None = None) -> dict:
     """Run every fold (see the module docstring); report(steps done, steps in all) as training goes. Returns
     {"folds": [facts...], "assets": [row...], "summary": {...}} and writes nothing but each fold's model and log
     under `out`."""

@@ -56,6 +56,7 @@ def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method
     assert set(result.scores) == expected and result.method in expected
     assert all(np.isfinite(s["score"]) for s in result.scores.values())
     assert ("learned model: corpus val L1" in result.reason) == (method == "auto")
+    assert (f"to the share {LearnedSkinning().prior_share:g}" in result.reason) == (method == "auto")  # what it ran
 
 
 def test_auto_falls_back_to_the_hand_written_methods_without_the_model(bent_tube, tmp_path) -> None:
@@ -223,16 +224,16 @@ def test_the_learned_model_averages_the_character_and_its_half_turn(bent_tube, m
     np.testing.assert_allclose(back.point[:, :3], inputs.point[:, :3] * [-1, 1, -1], atol=1e-6)
     np.testing.assert_allclose(back.bone[:, 3:6], inputs.bone[:, 3:6] * [-1, 1, -1], atol=1e-6)
     np.testing.assert_array_equal(back.pair, inputs.pair)
-    both = learned.learned_weights(v, f, skeleton, prior_share=0.0)
+    both = learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=0.0))
     monkeypatch.setattr(learned, "TURNS", (0.0,))
-    front = learned.learned_weights(v, f, skeleton, prior_share=0.0)
+    front = learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=0.0))
     monkeypatch.setattr(learned, "TURNS", (np.pi,))
-    behind = learned.learned_weights(v, f, skeleton, prior_share=0.0)
+    behind = learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=0.0))
     assert np.abs(front - behind).max() > 1e-3  # the turn changes what the model reads
     np.testing.assert_allclose(both, 0.5 * (front + behind), atol=1e-9)
     monkeypatch.setattr(learned, "TURNS", (0.0, np.pi))
     monkeypatch.setattr(learned, "TURN_PAIRS", inputs.candidates.size - 1)
-    np.testing.assert_allclose(learned.learned_weights(v, f, skeleton, prior_share=0.0), front, atol=1e-12)
+    np.testing.assert_allclose(learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=0.0)), front, atol=1e-12)
 
 
 def test_the_learned_weights_are_multiplied_by_the_geodesic_prior_to_its_share(bent_tube) -> None:
@@ -243,14 +244,14 @@ def test_the_learned_weights_are_multiplied_by_the_geodesic_prior_to_its_share(b
 
     v, f, skeleton = bent_tube
     inputs = skin_inputs(v, f, skeleton)
-    alone = learned.learned_weights(v, f, skeleton, prior_share=0.0)
-    mixed = learned.learned_weights(v, f, skeleton, prior_share=0.3)
+    alone = learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=0.0))
+    mixed = learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=0.3))
     np.testing.assert_allclose(mixed.sum(axis=1), 1.0, atol=1e-9)
     model = np.take_along_axis(alone, inputs.candidates, axis=1)
     prior = np.exp(inputs.prior.astype(np.float64))
     expected = np.maximum(model, 1e-12) ** 0.7 * prior ** 0.3
     np.testing.assert_allclose(np.take_along_axis(mixed, inputs.candidates, axis=1),
                                expected / expected.sum(axis=1, keepdims=True), atol=1e-6)
-    only_prior = np.take_along_axis(learned.learned_weights(v, f, skeleton, prior_share=1.0), inputs.candidates, axis=1)
+    only_prior = np.take_along_axis(learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=1.0)), inputs.candidates, axis=1)
     np.testing.assert_allclose(only_prior, prior / prior.sum(axis=1, keepdims=True), atol=1e-6)
     assert np.abs(mixed - alone).max() > 1e-3  # the prior moves the weights

@@ -13,7 +13,7 @@ from scipy.spatial import cKDTree
 from simcore.model_weights import ModelUnavailable, save_weights
 from simcore.skeleton.types import Skeleton
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
-from simcore.skinning.learned import learned_weights, load_model, with_armature_root
+from simcore.skinning.learned import LearnedSkinning, learned_weights, load_model, with_armature_root
 from simcore.training.sample_cache import save_sample
 from simcore.training.skin_samples import Character, decimated, make_sample, normalised, rerooted, subdivided, variants
 from simcore.training.skin_train import TrainConfig, batch_losses, sample_tensors, train_skin
@@ -38,7 +38,7 @@ def test_tiny_model_learns_and_predicts_normalised_rows(tmp_path: Path, ema: flo
     creature, out, summary = _tiny_run(tmp_path, ema)
     assert summary["val"]["l1"] < summary["val_at_start"]["l1"] - 0.02  # better than the geodesic prior it starts from
     assert len((tmp_path / "log.jsonl").read_text().splitlines()) >= 4
-    weights = learned_weights(creature.vertices, creature.faces, creature.skeleton, model_path=out)
+    weights = learned_weights(creature.vertices, creature.faces, creature.skeleton, learned=LearnedSkinning(out))
     assert weights.shape == (len(creature.vertices), creature.skeleton.num_joints)
     np.testing.assert_allclose(weights.sum(axis=1), 1.0, atol=1e-6)
     assert np.all(weights >= 0)
