@@ -82,14 +82,26 @@ def data(config: ConfigOption = DEFAULT_CONFIG, workers: WorkersOption = 1) -> N
 
 @app.command("skin")
 def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
-    """Train the skinning model on the cache, keep the best `val` state, write the .safetensors and its card."""
+    """Train the skinning model on the cache, keep the best `val` state, write the .safetensors and its card; with an
+    "ensemble" section ({"folds": N, "workers": W}), one member per group of corpus train families, saved as one."""
     from simcore.skinning.attention_model import ModelConfig
     from simcore.training.model_card import write_model_card
+    from simcore.training.skin_ensemble import FamilyEnsemble, train_ensemble
     from simcore.training.skin_train import TrainConfig, train_skin
 
-    summary = _train(config, "data", "skin", ModelConfig, TrainConfig, train_skin, write_model_card, "L1")
-    Console().print(f"best val L1 {summary['val']['l1']:.4f}, deformation {summary['val']['deform']:.5f} at step "
-                    f"{summary['best_step']} (start {summary['val_at_start']['l1']:.4f}); {summary['seconds']:.0f} s")
+    spec = read_config(config)
+    ensemble = FamilyEnsemble(**spec.get("ensemble", {}))
+    corpus = Path(spec.get("data", {}).get("corpus", "../shared/corpus"))
+
+    def train_members(train: TrainConfig, cache: Path, out: Path, log: Path, report: Callable[[int, int, dict], None]) -> dict:
+        return train_ensemble(train, ensemble, cache, corpus, out, log, lambda done, total: report(done, total, {}))
+
+    summary = _train(config, "data", "skin", ModelConfig, TrainConfig, train_members if ensemble.folds else train_skin,
+                     write_model_card, "L1")
+    where = (f"{len(summary['members'])} members, best steps {', '.join(str(m['best_step']) for m in summary['members'])}"
+             if ensemble.folds else f"step {summary['best_step']}")
+    Console().print(f"best val L1 {summary['val']['l1']:.4f}, deformation {summary['val']['deform']:.5f} at {where} "
+                    f"(start {summary['val_at_start']['l1']:.4f}); {summary['seconds']:.0f} s")
 
 
 @app.command("skeleton-data")

@@ -1,9 +1,11 @@
 """The `learned` skinning method: the trained bone–point attention model (weights shipped in the repo).
 
-The model is read once per process (a worker loads it on its first job, never per job). It reads each character
-twice, as it is and turned half a turn about the up axis, and averages the two (TURNS; one pass on big meshes).
-Its file is a safetensors state dict whose metadata carries the network sizes and training summary; a missing or
-corrupt file raises ModelUnavailable with the path and the reason.
+The model is read once per process (a worker loads it on its first job, never per job). It is an ensemble
+(ensemble.py): a member trained on every corpus train family first, then one member per group of families left
+out, whose logits are averaged. Each character is read by as many members as PASS_PAIRS allows, and twice, as it
+is and turned half a turn about the up axis, when every member fits twice (TURNS); the two readings' weights are
+averaged. Its file is a safetensors state dict whose metadata carries the network sizes and training summary; a
+missing or corrupt file raises ModelUnavailable with the path and the reason.
 
 The model's weights are then multiplied by the geodesic prior's (the falloff over the same candidate joints that
 the model also reads as a feature), each raised to its share, and the rows renormalised: a product of experts with
@@ -25,16 +27,19 @@ import torch
 from simcore.model_weights import load_weights, read_metadata
 from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
+from simcore.skinning.ensemble import SkinEnsemble
 from simcore.skinning.pair_features import skin_inputs, turned
 
 WEIGHTS = Path(__file__).parent / "weights" / "skin_attention.safetensors"
 CHUNK = 1024  # vertices per forward pass: the (chunk, K, width) activations stay in the CPU cache
 # Test-time augmentation: the model also reads the character turned half a turn about the up axis, and the two
-# predictions are averaged (it was trained on random turns, and its output still varies with the turn). The
-# second pass runs while the vertex-candidate pairs stay within TURN_PAIRS, which keeps a 50k-vertex, 60-joint
-# character within the ≤ 3 s skinning target (the network is about a fifth of that time per pass).
+# predictions are averaged (it was trained on random turns, and its output still varies with the turn).
 TURNS = (0.0, np.pi)
-TURN_PAIRS = 640_000
+# Network passes (one member reading the character once) times vertex-candidate pairs, per character: more members
+# first, then the second turn. A 50k-vertex, 60-joint character (~850k pairs) gets one pass of the first member, as
+# the ≤ 3 s skinning target needs (a pass of the network costs about 0.6 µs a pair on one CPU core); a 6k-vertex
+# character gets every member twice.
+PASS_PAIRS = 1_280_000
 PROGRESS_EVERY = 16  # chunks between progress reports
 PRIOR_SHARE = 0.15  # the geodesic prior's exponent in the product with the model's weights (module doc)
 ARMATURE_ROOT = "__armature_root__"
@@ -71,14 +76,23 @@ def learned_summary(learned: LearnedSkinning = SHIPPED) -> str:
     the prior's share in what it runs."""
     summary = read_metadata(learned.model, "skinning", "skinning")["summary"]
     val, start = summary["val"], summary["val_at_start"]
-    return (f"learned model: corpus val L1 {val['l1']:.3f} vs {start['l1']:.3f} for the geodesic prior it refines, "
+    members = len(summary.get("members", [])) or 1
+    return (f"learned model{f' (ensemble of {members})' if members > 1 else ''}: corpus val L1 {val['l1']:.3f} vs "
+            f"{start['l1']:.3f} for the geodesic prior it refines, "
             f"deformation {val['deform']:.4f} vs {start['deform']:.4f}; its weights times the prior's to the share "
             f"{learned.prior_share:g}")
 
 
 @lru_cache(maxsize=4)
-def load_model(path: Path = WEIGHTS) -> SkinAttention:
-    """The model stored at `path`, in eval mode (cached per process)."""
+def load_model(path: Path = WEIGHTS) -> SkinEnsemble:
+    """The model stored at `path` as an ensemble (a file of one plain model: an ensemble of one), in eval mode
+    (cached per process)."""
+    model = load_weights(path, "skinning", "skinning", SkinEnsemble.of_size)
+    return model if isinstance(model, SkinEnsemble) else SkinEnsemble([model]).eval()
+
+
+def load_member(path: Path) -> SkinAttention:
+    """The plain model stored at `path` (what `rigforge train skin` writes for one model), in eval mode."""
     return load_weights(path, "skinning", "skinning", lambda sizes: SkinAttention(ModelConfig(**sizes)))
 
 
@@ -106,9 +120,10 @@ def learned_weights(
                               progress=progress)[:, 1:]
         out[out.sum(axis=1) <= 0, 0] = 1.0  # a vertex the model gave wholly to the armature root: the body's root
         return out / out.sum(axis=1, keepdims=True)
-    model = load_model(learned.model)
     inputs = skin_inputs(vertices, faces, skeleton, progress=lambda f: progress(0.7 * f))
-    turns = TURNS if inputs.candidates.size <= TURN_PAIRS else TURNS[:1]
+    pairs = max(inputs.candidates.size, 1)
+    model = load_model(learned.model).leading(PASS_PAIRS // pairs)
+    turns = TURNS if pairs * len(model.members) * len(TURNS) <= PASS_PAIRS else TURNS[:1]
     count = len(inputs.candidates)
     mean = np.zeros(inputs.candidates.shape)  # (V, K) over the candidates, which no turn changes
     for k, angle in enumerate(turns):

@@ -32,12 +32,18 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         f"- samples: {summary['train_samples']} train, {summary['val_samples']} val; per category: {json.dumps(summary['categories'])}; "
         f"characters that failed to build: {data_summary.get('failed', 0)}",
     ]
+    members = summary.get("members", [])
     training = [
         f"- steps {train['steps']}, batch {train['batch']} samples × {train['points']} vertices, AdamW lr {train['lr']} (one-cycle), "
         f"loss L1 + {train['kl']} × CE + {train['deform']} × deformation, seed {train['seed']}",
         f"- network: {json.dumps(train['model'])}; {weights.stat().st_size / 1e6:.2f} MB",
         hardware_line(summary),
-        f"- best val state at step {summary['best_step']}",
+        *([f"- {len(members)} members (simcore/training/skin_ensemble.py): one on every family, the others each without one "
+           "group of corpus train families (the folds of `rigforge train skin-cv`); their logits are averaged, and they are stored "
+           "best first by their own val L1 (a character too large for all of them is read by the first ones)",
+           *(f"  - member {k}: {_member_data(m)}, {m['steps']} steps, best val state at step {m['best_step']}"
+             for k, m in enumerate(members))]
+          if members else [f"- best val state at step {summary['best_step']}"]),
     ]
     scores = [
         "## Val scores (corpus `val`, vertices sampled, model output before top-k)",
@@ -45,9 +51,16 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         "| | L1 | deformation (unit cube) |",
         "|---|---|---|",
         f"| geodesic prior (untrained) | {summary['val_at_start']['l1']:.4f} | {summary['val_at_start']['deform']:.5f} |",
-        f"| learned | {summary['val']['l1']:.4f} | {summary['val']['deform']:.5f} |",
+        *(f"| member {k} alone | {m['val']['l1']:.4f} | {m['val']['deform']:.5f} |" for k, m in enumerate(members)),
+        f"| learned{' (the ensemble)' if members else ''} | {summary['val']['l1']:.4f} | {summary['val']['deform']:.5f} |",
         "",
         "Evaluation tables with the full post-processing: `rigforge eval skin ../shared/corpus --split val --method all` and",
         "`rigforge eval skin ../shared/assets/dev --method all`.",
     ]
     return write_card(weights, "learned skinning weights (bone–point attention)", about, command, data, training, scores)
+
+
+def _member_data(member: dict) -> str:
+    """What an ensemble member trained on, in words."""
+    held = member["held_out"]
+    return f"without {len(held)} characters ({', '.join(held[:3])}, …)" if held else "every family"

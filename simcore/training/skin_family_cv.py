@@ -11,37 +11,32 @@ does. Folds run on `workers` processes (spawned; each trains on `config.threads`
 
 from __future__ import annotations
 
-import multiprocessing
-import queue
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from simcore.evaluation.assets import family_folds
 from simcore.evaluation.skin_eval import SkinEvaluation, evaluate_skinning
 from simcore.skinning.learned import SHIPPED
+from simcore.training.fold_pool import run_folds, step_reporter
 from simcore.training.skin_train import TrainConfig, train_skin
 
 METHODS = ("learned", "geodesic")
-POLL_S = 1.0
 
 
-def run_fold(fold: int, names: list[str], config: TrainConfig, cache: Path, corpus: Path, out: Path,
-             prior_share: float | None = None, progress: Any = None) -> tuple[dict, SkinEvaluation]:
-    """Train without `names` (one fold's held-out characters), then skin them with that model (its output times the
-    geodesic prior to `prior_share`, None: the shipped share) and with geodesic. `progress`: a queue that gets
-    (fold, step) as training goes. Returns (the fold's facts, its evaluation)."""
+def run_fold(fold: int, progress: Any, *, groups: list[list[str]], config: TrainConfig, cache: Path, corpus: Path,
+             out: Path, prior_share: float | None = None) -> tuple[dict, SkinEvaluation]:
+    """Train without `groups[fold]` (one fold's held-out characters), then skin them with that model (its output times
+    the geodesic prior to `prior_share`, None: the shipped share) and with geodesic. `progress`: a queue that gets
+    (fold, step) as training goes (fold_pool.run_folds). Returns (the fold's facts, its evaluation)."""
+    names = groups[fold]
     folder = out / f"fold_{fold}"
     folder.mkdir(parents=True, exist_ok=True)
     model = folder / "skin_attention.safetensors"
-
-    def report(step: int, total: int, entry: dict) -> None:
-        if progress is not None:
-            progress.put((fold, step))
-
-    summary = train_skin(replace(config, exclude=tuple(names)), cache, model, folder / "log.jsonl", report)
+    summary = train_skin(replace(config, exclude=tuple(names)), cache, model, folder / "log.jsonl",
+                         step_reporter(fold, progress))
     evaluation = evaluate_skinning(corpus, list(METHODS), split="train", names=set(names),
                                    learned=SHIPPED.overridden(model, prior_share))
     facts = {"fold": fold, "held_out": names, "best_step": summary["best_step"], "trainer_val": summary["val"],
@@ -69,25 +64,8 @@ def family_cv(config: TrainConfig, cache: Path, corpus: Path, folds: int, out: P
     {"folds": [facts...], "assets": [row...], "summary": {...}} and writes nothing but each fold's model and log
     under `out`."""
     groups = family_folds(corpus, "train", folds)
-    done, reported = [0] * folds, -1
-    context = multiprocessing.get_context("spawn")  # torch in a forked child of a process that used it can hang
-    with context.Manager() as manager, ProcessPoolExecutor(workers, mp_context=context) as pool:
-        progress = manager.Queue()
-        pending: set[Future] = {pool.submit(run_fold, k, g, config, cache, corpus, out, prior_share, progress) for k, g in enumerate(groups)}
-        results: list[tuple[dict, SkinEvaluation]] = []
-        while pending:
-            finished, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
-            results.extend(f.result() for f in finished)
-            try:
-                while True:
-                    fold, step = progress.get_nowait()
-                    done[fold] = step
-            except queue.Empty:
-                pass
-            if sum(done) != reported:  # one report per change (a plain log gets one line each)
-                reported = sum(done)
-                report(reported, folds * config.steps)
-    results.sort(key=lambda r: r[0]["fold"])
+    job = partial(run_fold, groups=groups, config=config, cache=cache, corpus=corpus, out=out, prior_share=prior_share)
+    results = run_folds(job, [config.steps] * folds, workers, report)
     merged = SkinEvaluation([row for _, evaluation in results for row in evaluation.rows],
                             {k: v for _, evaluation in results for k, v in evaluation.skipped.items()})
     return {"folds": [facts for facts, _ in results], "assets": [r.to_dict() for r in merged.rows],

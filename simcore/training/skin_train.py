@@ -79,6 +79,16 @@ def load_samples(folder: Path, device: str = "cpu", exclude: Collection[str] = (
     return out, cats
 
 
+def sample_categories(folder: Path) -> dict[str, int]:
+    """How many .npz samples in `folder` belong to each category (only each file's category is read)."""
+    counts: dict[str, int] = {}
+    for path in folder.glob("*.npz"):
+        with np.load(path, allow_pickle=False) as data:
+            category = str(data["category"])
+        counts[category] = counts.get(category, 0) + 1
+    return counts
+
+
 def _rows(sample: Tensors, rows: torch.Tensor | None) -> Tensors:
     if rows is None:
         return sample
@@ -116,21 +126,34 @@ def batch_losses(model: SkinAttention, samples: list[Tensors]) -> dict[str, torc
     p = torch.softmax(model.logits(pair, bones, point, candidates, prior, valid), dim=-1)
     moved = _padded([s["moved"] for s in samples], width, dim=2)
     posed = torch.cat([s["posed"] for s in samples], dim=1)
-    per_row = {
-        "l1": (p - target).abs().sum(dim=1) + outside,
-        "ce": -(target * torch.log(p + 1e-8)).sum(dim=1),
-        "deform": ((p[None, :, :, None] * moved).sum(dim=2) - posed).norm(dim=-1).mean(dim=0),
-    }
+    per_row = row_losses(p, target, outside, moved, posed)
     owner = torch.repeat_interleave(torch.arange(len(samples), device=device), rows)
     return {k: (torch.zeros(len(samples), device=device).index_add(0, owner, v) / rows).mean() for k, v in per_row.items()}
 
 
-def evaluate(model: SkinAttention, samples: list[Tensors]) -> dict[str, float]:
-    """Mean L1 and deformation over whole samples (no gradient)."""
+def row_losses(p: torch.Tensor, target: torch.Tensor, outside: torch.Tensor, moved: torch.Tensor, posed: torch.Tensor
+               ) -> dict[str, torch.Tensor]:
+    """Per vertex: L1 to the artist's row (`outside`: artist mass on no candidate), cross-entropy, and the distance
+    between the vertex skinned with `p` (V, K) and with the artist's weights in each pose (`moved` (P, V, K, 3): each
+    candidate's transform applied to the vertex; `posed` (P, V, 3)), averaged over the poses."""
+    return {
+        "l1": (p - target).abs().sum(dim=1) + outside,
+        "ce": -(target * torch.log(p + 1e-8)).sum(dim=1),
+        "deform": ((p[None, :, :, None] * moved).sum(dim=2) - posed).norm(dim=-1).mean(dim=0),
+    }
+
+
+def evaluate(model: torch.nn.Module, samples: list[Tensors]) -> dict[str, float]:
+    """Mean L1 and deformation over whole samples (no gradient) of a model whose forward maps (pair, bone, point,
+    candidates, prior) to weights over the candidates (SkinAttention or SkinEnsemble)."""
+    was_training = model.training
     model.eval()
     with torch.no_grad():
-        parts = [batch_losses(model, [s]) for s in samples]
-    model.train()
+        parts = []
+        for s in samples:
+            p = model(s["pair"], s["bone"], s["point"], s["candidates"], s["prior"])
+            parts.append({k: v.mean() for k, v in row_losses(p, s["target"], s["outside"], s["moved"], s["posed"]).items()})
+    model.train(was_training)
     return {k: round(float(np.mean([float(p[k]) for p in parts])), 5) for k in ("l1", "deform")}
 
 

@@ -44,7 +44,9 @@ def _dominant_joint_near_bones(v: np.ndarray, skeleton: Skeleton, weights: np.nd
 @pytest.mark.parametrize("method", ["learned", "geodesic", "heat", "auto"])
 def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method: Method) -> None:
     v, f, skeleton = bent_tube
-    result = compute_weights(v, f, skeleton, method=method, max_influences=2, smooth_iterations=2)
+    # The tube's root is a body joint that bends it (its bone is the lower half), as on a predicted skeleton; read as an
+    # armature root, the learned model rightly hedges towards leaving it unweighted, as artists leave theirs.
+    result = compute_weights(v, f, skeleton, method=method, max_influences=2, smooth_iterations=2, root_deforms=True)
     w = result.weights.toarray()
     assert result.weights.shape == (len(v), 3) and result.weights.dtype == np.float32
     stats = weight_stats(result.weights)
@@ -55,7 +57,7 @@ def test_methods_give_bone_dominated_normalised_sparse_weights(bent_tube, method
     expected = {"learned"} if method == "auto" else {method}  # the shipped model loads: auto takes it
     assert set(result.scores) == expected and result.method in expected
     assert all(np.isfinite(s["score"]) for s in result.scores.values())
-    assert ("learned model: corpus val L1" in result.reason) == (method == "auto")
+    assert ("corpus val L1" in result.reason and result.reason.startswith("learned model")) == (method == "auto")
     assert (f"to the share {LearnedSkinning().prior_share:g}" in result.reason) == (method == "auto")  # what it ran
 
 
@@ -214,7 +216,7 @@ def test_a_deforming_root_keeps_its_share_under_the_learned_model(bent_tube) -> 
 
 def test_the_learned_model_averages_the_character_and_its_half_turn(bent_tube, monkeypatch: pytest.MonkeyPatch) -> None:
     """Two readings, the character as it is and turned half a turn about the up axis, averaged; one reading where
-    the pairs would cost too much time."""
+    every member reading it twice would cost too much time."""
     from simcore.skinning import learned
     from simcore.skinning.pair_features import skin_inputs, turned
 
@@ -232,7 +234,8 @@ def test_the_learned_model_averages_the_character_and_its_half_turn(bent_tube, m
     assert np.abs(front - behind).max() > 1e-3  # the turn changes what the model reads
     np.testing.assert_allclose(both, 0.5 * (front + behind), atol=1e-9)
     monkeypatch.setattr(learned, "TURNS", (0.0, np.pi))
-    monkeypatch.setattr(learned, "TURN_PAIRS", inputs.candidates.size - 1)
+    members = len(learned.load_model().members)  # every member, but not twice: one reading
+    monkeypatch.setattr(learned, "PASS_PAIRS", inputs.candidates.size * members * 2 - 1)
     np.testing.assert_allclose(learned.learned_weights(v, f, skeleton, learned=LearnedSkinning(prior_share=0.0)), front, atol=1e-12)
 
 

@@ -145,7 +145,7 @@ def test_dropout_acts_in_training_only_and_is_stored_with_the_weights(tmp_path: 
         path = tmp_path / "dropout.safetensors"
         save_weights(model, path, {})
         loaded = load_model(path)
-        assert loaded.config.dropout == 0.3 and not loaded.training
+        assert loaded.config.member.dropout == 0.3 and not loaded.training
         np.testing.assert_allclose(loaded(*args).numpy(), model(*args).numpy(), atol=1e-6)
 
 
