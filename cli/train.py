@@ -32,6 +32,13 @@ def read_config(config: Path) -> dict:
     return json.loads(config.read_text(encoding="utf-8"))
 
 
+def corpus_of(spec: dict) -> Path:
+    """The corpus folder the config's "data" section names (the data builder's default when it names none)."""
+    from simcore.training.skin_dataset import DataConfig
+
+    return Path(DataConfig(**spec.get("data", {})).corpus)
+
+
 def train_section(spec: dict, model_config: Callable[..., object], train_config: Callable[..., T]) -> T:
     """The config's "train" section as `train_config`, its "model" part as `model_config`."""
     section = dict(spec.get("train", {}))
@@ -91,7 +98,7 @@ def skin(config: ConfigOption = DEFAULT_CONFIG) -> None:
 
     spec = read_config(config)
     ensemble = FamilyEnsemble(**spec.get("ensemble", {}))
-    corpus = Path(spec.get("data", {}).get("corpus", "../shared/corpus"))
+    corpus = corpus_of(spec)
 
     def train_members(train: TrainConfig, cache: Path, out: Path, log: Path, report: Callable[[int, int, dict], None]) -> dict:
         return train_ensemble(train, ensemble, cache, corpus, out, log, lambda done, total: report(done, total, {}))

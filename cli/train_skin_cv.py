@@ -19,7 +19,7 @@ from rich.table import Table
 
 from cli.eval_skin import METRIC_HEADS, PRIOR_SHARE_HELP, metric_cells
 from cli.progress import count_bar
-from cli.train import DEFAULT_CONFIG, ConfigOption, read_config, train_section
+from cli.train import DEFAULT_CONFIG, ConfigOption, corpus_of, read_config, train_section
 
 
 def render(result: dict, console: Console) -> None:
@@ -62,7 +62,7 @@ def skin_cv(
     train = train_section(spec, ModelConfig, TrainConfig)
     if steps is not None:
         train = replace(train, steps=steps)
-    corpus = Path(spec.get("data", {}).get("corpus", "../shared/corpus"))
+    corpus = corpus_of(spec)
     out.mkdir(parents=True, exist_ok=True)
     with count_bar("training folds") as update:
         result = family_cv(train, Path(spec["cache"]), corpus, folds, out, workers,

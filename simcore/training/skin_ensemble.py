@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -24,27 +24,25 @@ from simcore.evaluation.assets import family_folds
 from simcore.model_weights import save_weights
 from simcore.skinning.ensemble import SkinEnsemble
 from simcore.skinning.learned import load_member
-from simcore.training.fold_pool import run_folds, step_reporter
-from simcore.training.skin_train import TrainConfig, evaluate, load_samples, sample_categories, train_skin
+from simcore.training.fold_pool import run_folds
+from simcore.training.skin_train import TrainConfig, evaluate, load_samples, sample_categories, train_without
 
 
 @dataclass(frozen=True)
 class FamilyEnsemble:
-    """The JSON config's "ensemble" section: with `whole`, a first member trained on every family for the train
-    section's steps; then `folds` members (0: none, one plain model), each without one group of families, trained
-    for `fold_steps` (0: the train section's); `workers` members train at once (processes)."""
+    """The JSON config's "ensemble" section: besides the member trained on every family for the train section's
+    steps, `folds` members (0: none, one plain model), each without one group of families, trained for `fold_steps`
+    (0: the train section's); `workers` members train at once (processes)."""
 
     folds: int = 0
     fold_steps: int = 0
-    whole: bool = True
     workers: int = 1
 
 
 def train_member(index: int, progress: Any, *, held_out: list[tuple[str, ...]], steps: list[int], config: TrainConfig,
                  cache: Path, folder: Path) -> dict:
-    """Train member `index` without the characters `held_out[index]` for `steps[index]` steps; returns its summary."""
-    return train_skin(replace(config, exclude=held_out[index], steps=steps[index]), cache,
-                      folder / f"member_{index}.safetensors", folder / f"member_{index}.jsonl", step_reporter(index, progress))
+    """Train member `index` (folder/member_<index>.safetensors) without `held_out[index]` for `steps[index]` steps."""
+    return train_without(index, progress, held_out[index], steps[index], config, cache, folder / f"member_{index}.safetensors")
 
 
 def train_ensemble(config: TrainConfig, ensemble: FamilyEnsemble, cache: Path, corpus: Path, out: Path, log: Path,
@@ -52,10 +50,9 @@ def train_ensemble(config: TrainConfig, ensemble: FamilyEnsemble, cache: Path, c
     """Train the members (their files and logs in a folder beside `log`), save them as one ensemble at `out`, write
     each member's and the ensemble's val scores to `log`. Returns the summary stored with the weights."""
     started = time.perf_counter()
-    held_out = ([()] if ensemble.whole else []) + [tuple(g) for g in family_folds(corpus, "train", ensemble.folds)]
-    steps = [config.steps] * ensemble.whole + [ensemble.fold_steps or config.steps] * ensemble.folds
+    held_out = [(), *(tuple(g) for g in family_folds(corpus, "train", ensemble.folds))]
+    steps = [config.steps] + [ensemble.fold_steps or config.steps] * ensemble.folds
     folder = log.with_name(f"{log.stem}_members")
-    folder.mkdir(parents=True, exist_ok=True)
     job = partial(train_member, held_out=held_out, steps=steps, config=config, cache=cache, folder=folder)
     members = run_folds(job, steps, ensemble.workers, report)
     facts = [{"file": f"member_{k}.safetensors", "held_out": list(h), "steps": s, "best_step": m["best_step"],

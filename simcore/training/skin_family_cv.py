@@ -12,7 +12,6 @@ does. Folds run on `workers` processes (spawned; each trains on `config.threads`
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -20,8 +19,8 @@ from typing import Any
 from simcore.evaluation.assets import family_folds
 from simcore.evaluation.skin_eval import SkinEvaluation, evaluate_skinning
 from simcore.skinning.learned import SHIPPED
-from simcore.training.fold_pool import run_folds, step_reporter
-from simcore.training.skin_train import TrainConfig, train_skin
+from simcore.training.fold_pool import run_folds
+from simcore.training.skin_train import TrainConfig, train_without
 
 METHODS = ("learned", "geodesic")
 
@@ -32,11 +31,8 @@ def run_fold(fold: int, progress: Any, *, groups: list[list[str]], config: Train
     the geodesic prior to `prior_share`, None: the shipped share) and with geodesic. `progress`: a queue that gets
     (fold, step) as training goes (fold_pool.run_folds). Returns (the fold's facts, its evaluation)."""
     names = groups[fold]
-    folder = out / f"fold_{fold}"
-    folder.mkdir(parents=True, exist_ok=True)
-    model = folder / "skin_attention.safetensors"
-    summary = train_skin(replace(config, exclude=tuple(names)), cache, model, folder / "log.jsonl",
-                         step_reporter(fold, progress))
+    model = out / f"fold_{fold}.safetensors"
+    summary = train_without(fold, progress, names, config.steps, config, cache, model)
     evaluation = evaluate_skinning(corpus, list(METHODS), split="train", names=set(names),
                                    learned=SHIPPED.overridden(model, prior_share))
     facts = {"fold": fold, "held_out": names, "best_step": summary["best_step"], "trainer_val": summary["val"],

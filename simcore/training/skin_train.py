@@ -14,9 +14,9 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable, Collection
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -24,6 +24,7 @@ from torch.optim.swa_utils import AveragedModel, get_ema_multi_avg_fn
 
 from simcore.model_weights import save_weights
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
+from simcore.training.fold_pool import step_reporter
 from simcore.training.skin_samples import SkinSample
 
 
@@ -231,3 +232,12 @@ def train_skin(config: TrainConfig, data: Path, out: Path, log: Path, report: Ca
     with log.open("a", encoding="utf-8") as fh:
         fh.write(json.dumps({"event": "end", **summary}) + "\n")
     return summary
+
+
+def train_without(index: int, progress: Any, held_out: Collection[str], steps: int, config: TrainConfig, cache: Path,
+                  weights: Path) -> dict:
+    """`train_skin` for `steps` steps without the characters `held_out` (a group of families), into `weights` and its
+    .jsonl log beside it, putting (index, step) on the `progress` queue (fold_pool.run_folds). Returns its summary."""
+    weights.parent.mkdir(parents=True, exist_ok=True)
+    return train_skin(replace(config, exclude=tuple(held_out), steps=steps), cache, weights, weights.with_suffix(".jsonl"),
+                      step_reporter(index, progress))

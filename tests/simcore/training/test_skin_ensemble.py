@@ -17,7 +17,9 @@ from simcore.model_weights import save_weights
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.skinning.ensemble import SkinEnsemble
 from simcore.skinning.learned import LearnedSkinning, learned_weights, load_model
+from simcore.training.sample_cache import save_sample
 from simcore.training.skin_dataset import DataConfig, build_skin_data
+from simcore.training.skin_ensemble import save_ensemble
 from simcore.training.skin_samples import make_sample
 from simcore.training.skin_train import sample_tensors
 from tests.simcore.training.creatures import capsule_dog
@@ -126,3 +128,25 @@ def test_a_character_is_read_by_as_many_members_and_turns_as_the_pass_budget_all
     np.testing.assert_allclose(weights(both, 10**9), two, atol=1e-9)
     monkeypatch.setattr(learned, "TURNS", (0.0, np.pi))
     assert np.abs(weights(both, 4 * pairs) - two).max() > 1e-3  # both members, both readings
+
+
+def test_the_members_are_stored_best_first_by_their_own_val_score(tmp_path: Path) -> None:
+    """A character too large for every member is read by the first ones, so the file must hold the best first."""
+    rng = np.random.default_rng(0)
+    cache, folder = tmp_path / "cache", tmp_path / "members"
+    for split in ("train", "val"):
+        save_sample(cache / split / f"dog_{split}.npz", make_sample(capsule_dog(), rng, 100).arrays())
+    facts = []
+    for k, l1 in enumerate((0.7, 0.5, 0.6)):
+        folder.mkdir(exist_ok=True)
+        save_weights(_member(k), folder / f"member_{k}.safetensors", {})
+        facts.append({"file": f"member_{k}.safetensors", "held_out": [], "steps": 1, "best_step": 0,
+                      "val": {"l1": l1, "deform": 0.0}, "val_at_start": {"l1": 0.9, "deform": 0.0}})
+    out, log = tmp_path / "ensemble.safetensors", tmp_path / "log.jsonl"
+    summary = save_ensemble(facts, folder, cache, out, log, {"note": "kept"})
+    assert [m["file"] for m in summary["members"]] == ["member_1.safetensors", "member_2.safetensors", "member_0.safetensors"]
+    assert summary["note"] == "kept" and summary["train_samples"] == 1 and summary["categories"] == {"quadruped": 1}
+    stored = load_model(out).networks()
+    for network, k in zip(stored, (1, 2, 0)):
+        torch.testing.assert_close(network.out[0].weight, _member(k).out[0].weight)
+    assert [json.loads(line).get("file") for line in log.read_text().splitlines()][:3] == [m["file"] for m in summary["members"]]
