@@ -3,19 +3,38 @@
 `rigforge train skin-cv` (skin_family_cv.py) and the family ensemble (skin_ensemble.py) both train the same recipe
 once per group of corpus `train` families, each time without that group (`assets.family_folds`). The folds run
 on `workers` spawned processes (torch in a forked child of a process that used it can hang); each reports its
-training step through a queue, and `report(steps done, steps in all)` is called once per change.
+training step through a queue, and `report(steps done, steps in all)` is called once per change. A worker exits
+(and the queue's manager) exits
+within PARENT_POLL_S of its parent's death (a `kill` of the command, which Python's pool would not pass on), so no
+training runs on with nobody to take its result.
 """
 
 from __future__ import annotations
 
 import multiprocessing
+import os
 import queue
+import threading
+import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from multiprocessing.managers import SyncManager
 from typing import Any, TypeVar
 
 T = TypeVar("T")
 POLL_S = 1.0
+PARENT_POLL_S = 1.0
+
+
+def exit_with_parent(parent: int) -> None:
+    """Start a daemon thread that ends this process once its parent (pid `parent`) is gone (a pool's initializer)."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)  # the parent is gone: nobody reads this process's result
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
 
 
 def run_folds(job: Callable[[int, Any], T], steps: list[int], workers: int, report: Callable[[int, int], None]) -> list[T]:
@@ -25,7 +44,9 @@ def run_folds(job: Callable[[int, Any], T], steps: list[int], workers: int, repo
     folds = len(steps)
     done, reported = [0] * folds, -1
     context = multiprocessing.get_context("spawn")
-    with context.Manager() as manager, ProcessPoolExecutor(workers, mp_context=context) as pool:
+    manager = SyncManager(ctx=context)
+    manager.start(exit_with_parent, (os.getpid(),))
+    with manager, ProcessPoolExecutor(workers, mp_context=context, initializer=exit_with_parent, initargs=(os.getpid(),)) as pool:
         progress = manager.Queue()
         futures: dict[Future, int] = {pool.submit(job, k, progress): k for k in range(folds)}
         pending = set(futures)
