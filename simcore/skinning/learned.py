@@ -4,8 +4,8 @@ The model is read once per process (a worker loads it on its first job, never pe
 (ensemble.py): a member trained on every corpus train family and one per group of families left out, stored best
 first by their own val L1, whose logits are averaged. Each character is read by as many of the first members as
 PASS_PAIRS allows, and twice, as it is and turned half a turn about the up axis, when every member fits twice
-(TURNS); the two readings' weights are averaged. Its file is a safetensors state dict whose metadata carries the network sizes and training summary; a
-missing or corrupt file raises ModelUnavailable with the path and the reason.
+(TURNS); the two readings' weights are averaged. Its file is a safetensors state dict whose metadata carries the
+network sizes and training summary; a missing or corrupt file raises ModelUnavailable with the path and the reason.
 
 The model's weights are then multiplied by the geodesic prior's (the falloff over the same candidate joints that
 the model also reads as a feature), each raised to its share, and the rows renormalised: a product of experts with

@@ -25,7 +25,7 @@ from simcore.model_weights import save_weights
 from simcore.skinning.ensemble import SkinEnsemble
 from simcore.skinning.learned import load_member
 from simcore.training.fold_pool import run_folds
-from simcore.training.skin_train import TrainConfig, evaluate, load_samples, sample_categories, train_without
+from simcore.training.skin_train import TrainConfig, evaluate, load_samples, train_without
 
 
 @dataclass(frozen=True)
@@ -58,8 +58,10 @@ def train_ensemble(config: TrainConfig, ensemble: FamilyEnsemble, cache: Path, c
     facts = [{"file": f"member_{k}.safetensors", "held_out": list(h), "steps": s, "best_step": m["best_step"],
               "val": m["val"], "val_at_start": m["val_at_start"], "train_samples": m["train_samples"], "seconds": m["seconds"]}
              for k, (h, s, m) in enumerate(zip(held_out, steps, members))]
-    return save_ensemble(facts, folder, cache, out, log, {"seconds": round(time.perf_counter() - started, 1),
-                                                          "config": asdict(config), "ensemble": asdict(ensemble)})
+    whole = members[0]  # trained on every training sample: the data's size and mix, as a plain run reports them
+    return save_ensemble(facts, folder, cache, out, log, {
+        "train_samples": whole["train_samples"], "categories": whole["categories"],
+        "seconds": round(time.perf_counter() - started, 1), "config": asdict(config), "ensemble": asdict(ensemble)})
 
 
 def ensemble_of(facts: list[dict], folder: Path) -> SkinEnsemble:
@@ -71,12 +73,11 @@ def save_ensemble(facts: list[dict], folder: Path, cache: Path, out: Path, log: 
     """Save the members whose `facts` name their files in `folder` as one ensemble at `out`, ordered by their own val
     L1, best first (a character too large for every member to read it is read by the best ones, learned.PASS_PAIRS);
     score it on the val samples of `cache`; write each member's and the ensemble's scores to `log`. Returns the
-    summary stored with the weights (`extra` added to it)."""
+    summary stored with the weights (`extra`, the training data's figures among them, added to it)."""
     ordered = sorted(facts, key=lambda f: f["val"]["l1"])
     model = ensemble_of(ordered, folder)
     val, _ = load_samples(cache / "val")
     summary = {"val": evaluate(model, val), "val_at_start": ordered[0]["val_at_start"], "val_samples": len(val),
-               "train_samples": len(list((cache / "train").glob("*.npz"))), "categories": sample_categories(cache / "train"),
                "members": ordered, **extra}
     save_weights(model, out, summary)
     with log.open("w", encoding="utf-8") as fh:

@@ -80,16 +80,6 @@ def load_samples(folder: Path, device: str = "cpu", exclude: Collection[str] = (
     return out, cats
 
 
-def sample_categories(folder: Path) -> dict[str, int]:
-    """How many .npz samples in `folder` belong to each category (only each file's category is read)."""
-    counts: dict[str, int] = {}
-    for path in folder.glob("*.npz"):
-        with np.load(path, allow_pickle=False) as data:
-            category = str(data["category"])
-        counts[category] = counts.get(category, 0) + 1
-    return counts
-
-
 def _rows(sample: Tensors, rows: torch.Tensor | None) -> Tensors:
     if rows is None:
         return sample

@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -33,7 +34,8 @@ def _children(pid: int) -> list[int]:
     return out
 
 
-def _wait_for(condition, seconds: float) -> bool:
+def _wait_for(condition: Callable[[], bool], seconds: float) -> bool:
+    """Poll `condition` until it holds or `seconds` pass; its last value."""
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
         if condition():

@@ -100,7 +100,8 @@ def test_train_skin_with_an_ensemble_section_trains_one_member_per_family_group(
         assert e["train_samples"] == 2 * (4 - len(e["held_out"]))  # two variants per character, its group left out
         assert (log.parent / "skin_members" / e["file"]).with_suffix(".jsonl").is_file()
     assert [e["val"]["l1"] for e in members] == sorted(e["val"]["l1"] for e in members)  # best first
-    assert events[-1]["train_samples"] == 8 and events[-1]["val_samples"] == 1
+    assert events[-1]["train_samples"] == 8 and events[-1]["val_samples"] == 1  # the whole-corpus member's data
+    assert sum(events[-1]["categories"].values()) == 8
     card = out.with_suffix(".md").read_text()
     assert "3 members" in card and ": every family" in card and "member 2 alone" in card and "(the ensemble)" in card
 
@@ -143,9 +144,9 @@ def test_the_members_are_stored_best_first_by_their_own_val_score(tmp_path: Path
         facts.append({"file": f"member_{k}.safetensors", "held_out": [], "steps": 1, "best_step": 0,
                       "val": {"l1": l1, "deform": 0.0}, "val_at_start": {"l1": 0.9, "deform": 0.0}})
     out, log = tmp_path / "ensemble.safetensors", tmp_path / "log.jsonl"
-    summary = save_ensemble(facts, folder, cache, out, log, {"note": "kept"})
+    summary = save_ensemble(facts, folder, cache, out, log, {"train_samples": 3})
     assert [m["file"] for m in summary["members"]] == ["member_1.safetensors", "member_2.safetensors", "member_0.safetensors"]
-    assert summary["note"] == "kept" and summary["train_samples"] == 1 and summary["categories"] == {"quadruped": 1}
+    assert summary["train_samples"] == 3 and summary["val_samples"] == 1
     stored = load_model(out).networks()
     for network, k in zip(stored, (1, 2, 0)):
         torch.testing.assert_close(network.out[0].weight, _member(k).out[0].weight)
