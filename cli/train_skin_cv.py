@@ -3,7 +3,9 @@
 Registered in cli/main.py as `rigforge train skin-cv`. Trains the config's recipe once per fold of corpus `train`
 families, on the config's sample cache (build it first with `rigforge train data --config CONFIG`), and scores each
 fold's held-out characters against the geodesic method (simcore/training/skin_family_cv.py). Prints a table,
-writes OUT/cv.json; the fold models and logs stay under OUT.
+writes OUT/cv.json; the fold models and logs stay under OUT. With `--members WEIGHTS` nothing is trained: the fold
+members stored in an ensemble file (the shipped one: simcore/skinning/weights/skin_attention.safetensors) score the
+families they never saw, e.g. to check a prior share in minutes.
 """
 
 from __future__ import annotations
@@ -51,11 +53,14 @@ def skin_cv(
     workers: Annotated[int, typer.Option(min=1, help="folds trained at once (processes)")] = 1,
     out: Annotated[Path, typer.Option(help="folder for the fold models, logs and cv.json")] = Path(".rigforge-train/skin_cv"),
     prior_share: Annotated[float | None, typer.Option(min=0.0, max=1.0, help=PRIOR_SHARE_HELP)] = None,
+    members: Annotated[Path | None, typer.Option(exists=True, dir_okay=False, help=(
+        "score the fold members stored in this ensemble weights file instead of training "
+        "(folds, steps and workers are then the file's)"))] = None,
 ) -> None:
     """Cross-validate the skinning recipe by source family: every train character scored by a model that never
     saw its family, beside the geodesic method."""
     from simcore.skinning.attention_model import ModelConfig
-    from simcore.training.skin_family_cv import family_cv
+    from simcore.training.skin_family_cv import family_cv, stored_members_cv
     from simcore.training.skin_train import TrainConfig
 
     spec = read_config(config)
@@ -64,9 +69,13 @@ def skin_cv(
         train = replace(train, steps=steps)
     corpus = corpus_of(spec)
     out.mkdir(parents=True, exist_ok=True)
-    with count_bar("training folds") as update:
-        result = family_cv(train, Path(spec["cache"]), corpus, folds, out, workers,
-                           lambda done, total: update("", done, total), prior_share)
+    if members is not None:
+        with count_bar("scoring stored folds") as update:
+            result = stored_members_cv(members, corpus, out, lambda done, total: update("", done, total), prior_share)
+    else:
+        with count_bar("training folds") as update:
+            result = family_cv(train, Path(spec["cache"]), corpus, folds, out, workers,
+                               lambda done, total: update("", done, total), prior_share)
     console = Console() if Console().is_terminal else Console(width=150)
     render(result, console)
     (out / "cv.json").write_text(json.dumps(result, indent=1))

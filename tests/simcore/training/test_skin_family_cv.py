@@ -8,6 +8,7 @@ import io
 from pathlib import Path
 
 import pytest
+import torch
 from rich.console import Console
 from typer.testing import CliRunner
 
@@ -15,9 +16,13 @@ from cli.main import app
 from cli.train_skin_cv import render
 from simcore.errors import InvalidInput
 from simcore.evaluation.assets import family_folds, read_families
-from simcore.skinning.attention_model import ModelConfig
+from simcore.evaluation.skin_eval import evaluate_skinning
+from simcore.model_weights import save_weights
+from simcore.skinning.attention_model import ModelConfig, SkinAttention
+from simcore.skinning.ensemble import SkinEnsemble
+from simcore.skinning.learned import SHIPPED
 from simcore.training.skin_dataset import DataConfig, build_skin_data
-from simcore.training.skin_family_cv import family_cv
+from simcore.training.skin_family_cv import family_cv, stored_members_cv
 from simcore.training.skin_train import TrainConfig, load_samples
 from tests.simcore.io.studio_rig_fixtures import studio_rig, to_glb
 
@@ -73,6 +78,44 @@ def test_every_train_character_is_scored_once_by_a_model_that_never_saw_it(tmp_p
     out = io.StringIO()
     render(result, Console(file=out, width=160))
     assert "of 4 held-out characters" in out.getvalue() and "ALL (humanoid)" in out.getvalue()
+
+
+def _random_member(seed: int) -> SkinAttention:
+    """A small skinning network whose every parameter is random (distinct members give distinct weights)."""
+    torch.manual_seed(seed)
+    member = SkinAttention(ModelConfig(width=8, heads=2, bone_layers=1))
+    with torch.no_grad():
+        for parameter in member.parameters():
+            parameter.normal_(0.0, 0.5)
+    return member.eval()
+
+
+def test_stored_fold_members_score_the_families_they_never_saw(tmp_path: Path) -> None:
+    """`skin-cv --members`: each fold member of an ensemble file, and no other, skins the characters the file says it
+    was trained without (the rows equal `eval skin` with that member alone); a file without fold members is refused."""
+    root = corpus(tmp_path, [("a1", "train", "family=fa"), ("b1", "train", "family=fb"), ("v1", "val", "family=fv")])
+    whole, fold_a, fold_b = (_random_member(seed) for seed in (1, 2, 3))
+    facts = [{"held_out": held, "best_step": 2, "val": {"l1": 0.5}, "train_samples": 2} for held in ([], ["a1"], ["b1"])]
+    ensemble = tmp_path / "ensemble.safetensors"
+    save_weights(SkinEnsemble([whole, fold_a, fold_b]), ensemble, {"members": facts})
+    reports: list[tuple[int, int]] = []
+    stored = stored_members_cv(ensemble, root, tmp_path / "stored", lambda done, total: reports.append((done, total)))
+    assert reports == [(1, 2), (2, 2)] and [f["held_out"] for f in stored["folds"]] == [["a1"], ["b1"]]
+    got = {(r["name"], r["method"]): r["l1"] for r in stored["assets"]}
+    expected = {}
+    for name, member in (("a1", fold_a), ("b1", fold_b)):
+        alone = tmp_path / f"alone_{name}.safetensors"
+        save_weights(member, alone, {})
+        rows = evaluate_skinning(root, ["learned"], split="train", names={name}, learned=SHIPPED.overridden(alone)).rows
+        expected[(name, "learned")] = rows[0].metrics["l1"]
+    assert {key: got[key] for key in expected} == pytest.approx(expected, abs=1e-6) and ("a1", "geodesic") in got
+    assert expected[("a1", "learned")] != evaluate_skinning(  # the members differ: a swap would show
+        root, ["learned"], split="train", names={"a1"}, learned=SHIPPED.overridden(tmp_path / "alone_b1.safetensors")
+    ).rows[0].metrics["l1"]
+    plain = tmp_path / "plain.safetensors"
+    save_weights(whole, plain, {"members": facts[:1]})
+    with pytest.raises(InvalidInput, match="no member trained without"):
+        stored_members_cv(plain, root, tmp_path / "plain", lambda done, total: None)
 
 
 def test_eval_skin_scores_the_model_it_is_given(tmp_path: Path) -> None:
