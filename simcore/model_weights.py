@@ -1,11 +1,13 @@
 """Trained weights shipped in the repo: safetensors state dicts whose metadata carries the network sizes ("model")
-and the training summary ("summary"). Read without pickle; any unreadable file is a ModelUnavailable naming it."""
+and the training summary ("summary"). Read without pickle; any unreadable file is a ModelUnavailable naming it.
+What is read from a file is kept per process (`cached_per_file`) until the file changes."""
 
 from __future__ import annotations
 
+import functools
+import inspect
 import json
 from collections.abc import Callable
-from functools import lru_cache
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
@@ -32,6 +34,36 @@ class Configured(Protocol):
 
 
 M = TypeVar("M", bound=torch.nn.Module)
+R = TypeVar("R")
+
+
+def cached_per_file(maxsize: int) -> Callable[[Callable[..., R]], Callable[..., R]]:
+    """`functools.lru_cache` for a reader whose first argument is a file's path, keyed also by the file's modification
+    time and size: a process reads a file once, and again only after it is rewritten (a model saved over an
+    earlier one at the same path). The reader's own defaults and keywords apply as they are."""
+
+    def decorate(read: Callable[..., R]) -> Callable[..., R]:
+        signature = inspect.signature(read)
+
+        @functools.lru_cache(maxsize=maxsize)
+        def cached(version: tuple[int, int] | None, path: Path, *args: Any) -> R:
+            return read(path, *args)
+
+        @functools.wraps(read)
+        def reader(*args: Any, **kwargs: Any) -> R:
+            bound = signature.bind(*args, **kwargs)
+            bound.apply_defaults()
+            path = Path(bound.args[0])
+            try:
+                stat = path.stat()
+                version: tuple[int, int] | None = (stat.st_mtime_ns, stat.st_size)
+            except OSError:
+                version = None  # the reader says why it cannot read the file
+            return cached(version, *bound.args)
+
+        return reader
+
+    return decorate
 
 
 def save_weights(model: Configured, path: Path, summary: dict) -> None:
@@ -41,7 +73,7 @@ def save_weights(model: Configured, path: Path, summary: dict) -> None:
     save_file(state, str(path), metadata={"model": json.dumps(model.config.to_dict()), "summary": json.dumps(summary)})
 
 
-@lru_cache(maxsize=8)
+@cached_per_file(maxsize=8)
 def read_metadata(path: Path, what: str, field: str) -> dict[str, dict]:
     """The file's JSON metadata {"model": sizes, "summary": training figures}; `what` names the model in errors."""
     if not path.is_file():

@@ -11,13 +11,12 @@ raises ModelUnavailable with the path and the reason.
 from __future__ import annotations
 
 import time
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from simcore.model_weights import load_weights, read_metadata
+from simcore.model_weights import cached_per_file, load_weights, read_metadata
 from simcore.skeleton.candidate_score import LOG_PROB_WEIGHT, ShapeContext, score_candidate, shape_context
 from simcore.skeleton.candidates import Candidate
 from simcore.skeleton.grammar import SkeletonGrammar
@@ -37,9 +36,9 @@ CANDIDATES = 16  # decoded sequences per mesh: one greedy per class, the rest sa
 SECTION_LIMIT = 6.0  # voxels of the quality score's solid: decoded joints are a few coordinate bins off
 
 
-@lru_cache(maxsize=4)
+@cached_per_file(maxsize=4)
 def load_skeleton_model(path: Path = WEIGHTS) -> SkeletonTokenModel:
-    """The model stored at `path`, in eval mode (cached per process)."""
+    """The model stored at `path`, in eval mode (read once per process, again if the file changes)."""
     return load_weights(path, "skeleton", "skeleton", lambda sizes: SkeletonTokenModel(SkeletonModelConfig(**sizes)))
 
 

@@ -18,13 +18,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from simcore.model_weights import load_weights, read_metadata
+from simcore.model_weights import cached_per_file, load_weights, read_metadata
 from simcore.skeleton.types import JointKind, Skeleton
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.skinning.ensemble import SkinEnsemble
@@ -83,10 +82,10 @@ def learned_summary(learned: LearnedSkinning = SHIPPED) -> str:
             f"{learned.prior_share:g}")
 
 
-@lru_cache(maxsize=4)
+@cached_per_file(maxsize=4)
 def load_model(path: Path = WEIGHTS) -> SkinEnsemble:
     """The model stored at `path` as an ensemble (a file of one plain model: an ensemble of one), in eval mode
-    (cached per process)."""
+    (read once per process, again if the file changes)."""
     model = load_weights(path, "skinning", "skinning", SkinEnsemble.of_size)
     return model if isinstance(model, SkinEnsemble) else SkinEnsemble([model]).eval()
 

@@ -3,10 +3,9 @@
 `rigforge train skin-cv` (skin_family_cv.py) and the family ensemble (skin_ensemble.py) both train the same recipe
 once per group of corpus `train` families, each time without that group (`assets.family_folds`). The folds run
 on `workers` spawned processes (torch in a forked child of a process that used it can hang); each reports its
-training step through a queue, and `report(steps done, steps in all)` is called once per change. A worker exits
-(and the queue's manager) exits
-within PARENT_POLL_S of its parent's death (a `kill` of the command, which Python's pool would not pass on), so no
-training runs on with nobody to take its result.
+training step through a queue, and `report(steps done, steps in all)` is called once per change. The workers and
+the queue's manager exit within PARENT_POLL_S of their parent's death (a `kill` of the command, which Python's pool
+does not pass on to them), so no training runs on with nobody to take its result.
 """
 
 from __future__ import annotations

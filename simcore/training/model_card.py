@@ -35,9 +35,9 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
     members = summary.get("members", [])
     training = [
         f"- steps {train['steps']}, batch {train['batch']} samples × {train['points']} vertices, AdamW lr {train['lr']} (one-cycle), "
-        f"weight decay {train.get('weight_decay', 0.0):g}, loss L1 + {train['kl']} × CE + {train['deform']} × deformation, seed {train['seed']}",
+        f"weight decay {train['weight_decay']:g}, loss L1 + {train['kl']} × CE + {train['deform']} × deformation, seed {train['seed']}",
         *([f"- the weights' exponential moving average (decay {train['ema']:g} a step) is what is validated and saved"]
-          if train.get("ema") else []),
+          if train["ema"] else []),
         f"- network: {json.dumps(train['model'])}; {weights.stat().st_size / 1e6:.2f} MB",
         hardware_line(summary),
         *([f"- {len(members)} members (simcore/training/skin_ensemble.py): one on every family, the others each without one "

@@ -100,6 +100,10 @@ def test_stored_fold_members_score_the_families_they_never_saw(tmp_path: Path) -
     save_weights(SkinEnsemble([whole, fold_a, fold_b]), ensemble, {"members": facts})
     reports: list[tuple[int, int]] = []
     stored = stored_members_cv(ensemble, root, tmp_path / "stored", lambda done, total: reports.append((done, total)))
+    swapped = tmp_path / "swapped.safetensors"  # the same folder scored again for another file: its own members count
+    save_weights(SkinEnsemble([whole, fold_b, fold_a]), swapped, {"members": facts})
+    again = {(r["name"], r["method"]): r["l1"] for r in
+             stored_members_cv(swapped, root, tmp_path / "stored", lambda done, total: None)["assets"]}
     assert reports == [(1, 2), (2, 2)] and [f["held_out"] for f in stored["folds"]] == [["a1"], ["b1"]]
     got = {(r["name"], r["method"]): r["l1"] for r in stored["assets"]}
     expected = {}
@@ -109,6 +113,7 @@ def test_stored_fold_members_score_the_families_they_never_saw(tmp_path: Path) -
         rows = evaluate_skinning(root, ["learned"], split="train", names={name}, learned=SHIPPED.overridden(alone)).rows
         expected[(name, "learned")] = rows[0].metrics["l1"]
     assert {key: got[key] for key in expected} == pytest.approx(expected, abs=1e-6) and ("a1", "geodesic") in got
+    assert again[("a1", "learned")] == pytest.approx(got[("b1", "learned")], abs=1e-6)  # a1 and b1 are one rig
     assert expected[("a1", "learned")] != evaluate_skinning(  # the members differ: a swap would show
         root, ["learned"], split="train", names={"a1"}, learned=SHIPPED.overridden(tmp_path / "alone_b1.safetensors")
     ).rows[0].metrics["l1"]
