@@ -81,6 +81,9 @@ def eval_skeleton(
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
     ablate: Annotated[bool, typer.Option("--ablate", help="the geometric method with each special-case rule off in turn "
                                                           "(--method is ignored)")] = False,
+    model: Annotated[Path | None, typer.Option(exists=True, dir_okay=False,
+                                               help="learned skeleton weights (.safetensors) to score instead of the shipped "
+                                                    "ones, e.g. a fresh `rigforge train skeleton` output")] = None,
 ) -> None:
     """Score predicted skeletons against each rig's used skin joints (the job's ingest and prediction): J2J, J2B,
     B2B, joint counts, inside share; or, with --ablate, what each geometric rule changes."""
@@ -98,7 +101,8 @@ def eval_skeleton(
             if ablate:
                 report = ablate_directory(dir, max_joints=max_joints, split=split, on_asset=on_asset).to_dict()
             else:
-                report = evaluate_directory(dir, method, max_joints=max_joints, split=split, on_asset=on_asset).to_dict()
+                report = evaluate_directory(dir, method, max_joints=max_joints, split=split, on_asset=on_asset,
+                                            learned_model=model).to_dict()
     except SimcoreError as exc:
         console.print(f"[red]{exc.code}[/red]: {exc}")
         raise typer.Exit(2) from exc

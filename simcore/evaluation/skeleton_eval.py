@@ -158,14 +158,15 @@ def load_case(path: Path) -> EvalCase:
     return EvalCase(mesh, mesh_ground(mesh)[1], gt, grid)
 
 
-def job_prediction(case: EvalCase, method: str, max_joints: int = 64, geometric_params: GeometricParams | None = None
-                   ) -> SkeletonPrediction:
-    """The skeleton a job with options {skeleton: method, max_joints} predicts for the case's upload."""
+def job_prediction(case: EvalCase, method: str, max_joints: int = 64, geometric_params: GeometricParams | None = None,
+                   learned_model: Path | None = None) -> SkeletonPrediction:
+    """The skeleton a job with options {skeleton: method, max_joints} predicts for the case's upload (with the
+    learned method's weights from `learned_model` when given)."""
     from simcore.options import JobOptions
     from simcore.skeleton.stage import predict_for_job
 
     options = JobOptions(skeleton=method, max_joints=max_joints)
-    return predict_for_job(case.mesh, options, case.ground, geometric_params)
+    return predict_for_job(case.mesh, options, case.ground, geometric_params, learned_model)
 
 
 def _token_counts(case: EvalCase) -> dict[str, int]:
@@ -199,7 +200,8 @@ def _candidate_rows(name: str, category: str, case: EvalCase, prediction: Skelet
 
 
 def evaluate_asset(name: str, category: str, case: EvalCase, methods: list[str], max_joints: int = 64,
-                   geometric_params: GeometricParams | None = None, candidate_rows: bool = False) -> list[AssetResult]:
+                   geometric_params: GeometricParams | None = None, candidate_rows: bool = False,
+                   learned_model: Path | None = None) -> list[AssetResult]:
     """Score every method on one case (a failing method gives a row with its error); with `candidate_rows`, `auto`
     also gives a row per candidate method (CANDIDATE_METHODS)."""
     rows: list[AssetResult] = []
@@ -211,7 +213,7 @@ def evaluate_asset(name: str, category: str, case: EvalCase, methods: list[str],
                 scores = graph_scores(joints, edges, case.gt, case.mesh.vertices, case.mesh.faces, grid=case.grid)
                 rows.append(AssetResult(name, category, method, scores, time.perf_counter() - started))
                 continue
-            prediction = job_prediction(case, method, max_joints, geometric_params)
+            prediction = job_prediction(case, method, max_joints, geometric_params, learned_model)
             seconds = time.perf_counter() - started
             if method == "humanoid" and prediction.method != "humanoid":
                 # The auto and geometric rows already cover a fallback; do not count it as humanoid.
@@ -229,9 +231,11 @@ def evaluate_asset(name: str, category: str, case: EvalCase, methods: list[str],
 
 def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int = 64, split: str | None = None,
                        on_asset: Callable[[str], None] | None = None,
-                       geometric_params: GeometricParams | None = None) -> SkeletonEvaluation:
+                       geometric_params: GeometricParams | None = None, learned_model: Path | None = None
+                       ) -> SkeletonEvaluation:
     """Evaluate every rigged .glb/.gltf in `directory` with `method` ("all", "voxel", "auto", ...); with `split`,
-    only the files `directory`/MANIFEST.tsv lists for that split (the corpus layout)."""
+    only the files `directory`/MANIFEST.tsv lists for that split (the corpus layout); `learned_model`: the
+    learned method's weights to score instead of the shipped file."""
     methods = resolve_methods(method)
     report = SkeletonEvaluation()
     categories = read_categories(directory)
@@ -247,5 +251,6 @@ def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int 
             continue
         report.tokens[name] = tokens
         report.results.extend(evaluate_asset(name, categories.get(name, "unknown"), case, methods, max_joints,
-                                             geometric_params, candidate_rows=method == "all"))
+                                             geometric_params, candidate_rows=method == "all",
+                                             learned_model=learned_model))
     return report

@@ -1,8 +1,9 @@
 """The `learned` skeleton method: the trained skeleton-token model, decoded best-of-N (weights in the repo).
 
 The model reads `points` surface samples of the mesh (in the token frame, glTF +Y up), then writes candidate
-token sequences under the grammar (never an invalid tree): one greedy sequence per class token (articulation,
-Mixamo, the game-engine humanoid) and the rest sampled. Each is placed in the solid (`refined`) and scored
+token sequences under the grammar (never an invalid tree): one greedy sequence per class token it was trained on
+(articulation, Mixamo, the game-engine humanoid, and `none` for procedural creatures when the training data had
+them) and the rest sampled. Each is placed in the solid (`refined`) and scored
 without ground truth (`simcore.skeleton.candidate_score`, plus the model's log-probability); the best is kept.
 `auto` takes all of them as candidates. The weights file is read once per process; a missing or corrupt file
 raises ModelUnavailable with the path and the reason.
@@ -30,7 +31,7 @@ from simcore.skeleton.tokenizer import SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
 
 WEIGHTS = Path(__file__).parent / "weights" / "skeleton_tokens.safetensors"
-GREEDY_CLASSES = ("articulation", "mixamo", "vroid")
+GREEDY_CLASSES = ("articulation", "mixamo", "vroid", "none")  # those the model was trained on are decoded
 TEMPERATURE = 0.8
 CANDIDATES = 16  # decoded sequences per mesh: one greedy per class, the rest sampled
 SECTION_LIMIT = 6.0  # voxels of the quality score's solid: decoded joints are a few coordinate bins off
@@ -83,11 +84,14 @@ def learned_candidates(vertices: np.ndarray, faces: np.ndarray, shape: ShapeCont
     started = time.perf_counter()
     model_path = WEIGHTS if model_path is None else model_path
     model = load_skeleton_model(model_path)
-    points = int(read_metadata(model_path, "skeleton", "skeleton")["summary"]["config"]["points"])
+    summary = read_metadata(model_path, "skeleton", "skeleton")["summary"]
+    points = int(summary["config"]["points"])
+    trained = summary.get("classes", {"articulation": 1, "mixamo": 1, "vroid": 1})  # older files list none: those three
+    greedy = [c for c in GREEDY_CLASSES if c in trained]
     cloud, norm = shape_points(vertices, faces, points, np.random.default_rng(seed))
     grammar = SkeletonGrammar(max_length=model.config.max_tokens, max_joints=max_joints)
-    classes = list(GREEDY_CLASSES[:candidates])
-    sampled = [GREEDY_CLASSES[k % len(GREEDY_CLASSES)] for k in range(max(0, candidates - len(classes)))]
+    classes = greedy[:candidates]
+    sampled = [greedy[k % len(greedy)] for k in range(max(0, candidates - len(classes)))]
     generator = torch.Generator().manual_seed(seed)
     tensor = torch.from_numpy(cloud)
     decoded = decode_tokens(model, tensor, classes, grammar)

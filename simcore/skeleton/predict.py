@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -74,7 +75,8 @@ def _auto(v: np.ndarray, f: np.ndarray, parts: list[SurfacePart], up: np.ndarray
 
 def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "auto", max_joints: int = 64,
                      up_axis: str | None = None, forward_axis: str | None = None,
-                     geometric_params: GeometricParams | None = None) -> SkeletonPrediction:
+                     geometric_params: GeometricParams | None = None, learned_model: Path | None = None
+                     ) -> SkeletonPrediction:
     """Predict a skeleton for a triangle mesh.
 
     vertices: (V, 3) float64 positions (metres; any frame, the skeleton comes back in the same frame).
@@ -88,6 +90,7 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
     up_axis / forward_axis: "x", "-x", "y", … overrides for the humanoid fit; None = detect. The geometric method
               uses up_axis (default glTF's +Y) only to tell legs standing on the floor.
     geometric_params: the geometric method's tuning (None = the defaults; the ablation changes it).
+    learned_model: the learned method's weights file (None = the shipped one; the eval scores a fresh model).
     Report keys: "method", "timings_s", and "humanoid" (detection, confidence, facing) / "geometric" / "learned"
     / "auto".
     """
@@ -105,7 +108,7 @@ def predict_skeleton(vertices: np.ndarray, faces: np.ndarray, *, method: str = "
         from simcore.skeleton.learned import learned_skeleton
 
         started = time.perf_counter()
-        skeleton, report["learned"] = learned_skeleton(v, f, max_joints=max_joints)
+        skeleton, report["learned"] = learned_skeleton(v, f, max_joints=max_joints, model_path=learned_model)
         report["timings_s"] = {"learned": round(time.perf_counter() - started, 3)}
         return SkeletonPrediction(skeleton, "learned", report)
     parts = surface_parts(v, f)

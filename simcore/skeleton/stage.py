@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import time
 from dataclasses import replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -68,14 +69,17 @@ def _given_skeleton(state: PipelineState, path: Path, vertices: np.ndarray) -> S
 
 
 def predict_for_job(mesh: IngestedMesh, options: JobOptions, ground: np.ndarray,
-                    geometric_params: GeometricParams | None = None) -> SkeletonPrediction:
+                    geometric_params: GeometricParams | None = None, learned_model: Path | None = None
+                    ) -> SkeletonPrediction:
     """The skeleton a job predicts for an ingested mesh with `options` (skeleton method, max_joints, axes), the
     ground-plane triangles `ground` (F,) bool left out, under a root at the file's origin (`origin_root`) unless
     options.root_joint is "none". `rigforge eval skeleton` calls this too, so its figures are what a job gives.
-    geometric_params: the geometric method's tuning (None = the defaults; the ablation changes it)."""
+    geometric_params: the geometric method's tuning (None = the defaults; the ablation changes it); learned_model:
+    the learned method's weights (None = the shipped file)."""
     prediction = predict_skeleton(
         mesh.vertices, mesh.faces[~ground], method=options.skeleton, max_joints=options.max_joints,
         up_axis="y" if options.up_axis else None, forward_axis=options.forward_axis, geometric_params=geometric_params,
+        learned_model=learned_model,
     )
     skeleton, why = job_root(prediction.skeleton, mesh, ground, options)
     if why is None:

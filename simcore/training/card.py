@@ -23,6 +23,15 @@ def corpus_line(data_config: dict) -> str:
             "(by source family; never the dev assets)")
 
 
+def creatures_lines(data_config: dict) -> list[str]:
+    """A data line for the procedural creatures when the data section asks for them, else none."""
+    if not data_config.get("creatures"):
+        return []
+    return [f"- {data_config['creatures']} procedural creatures (simcore/training/creature_bodies.py: quadrupeds, insects, "
+            "spiders, birds, snakes, fish, dragons and long-tailed bipeds, one surface meshed around tapered bone tubes, "
+            f"weights blended between the tubes), {data_config['anny_variants']} variants each"]
+
+
 def hardware_line(summary: dict) -> str:
     """Machine, torch and threads (or GPU) of the run, and how long it took."""
     config = summary["config"]

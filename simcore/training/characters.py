@@ -1,8 +1,8 @@
 """The training characters every learned model draws on, and the per-character jobs that turn them into samples.
 
 Sources: the corpus (`MANIFEST.tsv` split `train` for training, `val` for model selection) with each file's own
-clips, and `anny` bodies (train only; `anny` is imported only when bodies are asked for). Deterministic by seed:
-character i of a source draws from default_rng([seed, source, i]).
+clips, `anny` bodies and procedural creatures (`creature_bodies`; both train only, `anny` imported only when
+bodies are asked for). Deterministic by seed: character i of a source draws from default_rng([seed, source, i]).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from simcore.evaluation.skin_eval import clip_skin_matrices
 from simcore.metrics.skinning import unit_cube_frame
 from simcore.skeleton.types import Skeleton
 from simcore.training.anny_bodies import RIGS, anny_bodies
+from simcore.training.creature_bodies import creature_character, creature_name
 from simcore.training.sample_cache import Job
 from simcore.training.skin_samples import Character
 
@@ -40,9 +41,10 @@ def corpus_characters(root: Path, split: str, skipped: dict[str, str]) -> Iterat
 
 
 def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str], *, train: Make, val: Make,
-                   body: Make, rigs: Sequence[str] = RIGS) -> tuple[Iterator[Job], int]:
+                   body: Make, rigs: Sequence[str] = RIGS, creatures: int = 0) -> tuple[Iterator[Job], int]:
     """(jobs for sample_cache.fill_cache, their count): corpus train characters made by `train`, corpus val by
-    `val`, then `bodies` anny bodies by `body`, in anny's `rigs` taken in turn."""
+    `val`, then `bodies` anny bodies by `body`, in anny's `rigs` taken in turn, then `creatures` procedural
+    creatures by `body` (each built inside its job, so the build runs on the cache's workers)."""
 
     sources = [list(corpus_characters(corpus, "train", skipped)), list(corpus_characters(corpus, "val", skipped))]
 
@@ -56,5 +58,12 @@ def character_jobs(corpus: Path, seed: int, bodies: int, skipped: dict[str, str]
         people = anny_bodies(bodies, np.random.default_rng([seed, 2]), rigs) if bodies else iter(())
         for i, c in enumerate(people):
             yield job("train", body, c, np.random.default_rng([seed, 3, i]))
+        for i in range(creatures):
+            yield "train", creature_name(i), partial(built_creature, i, np.random.default_rng([seed, 4, i]), body)
 
-    return jobs(), len(sources[0]) + len(sources[1]) + bodies
+    return jobs(), len(sources[0]) + len(sources[1]) + bodies + creatures
+
+
+def built_creature(k: int, rng: np.random.Generator, make: Make) -> Iterable[Mapping[str, np.ndarray]]:
+    """Samples `make` draws from procedural creature k, built from the same generator."""
+    return make(creature_character(k, rng), rng)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from simcore.training.card import corpus_line, hardware_line, write_card
+from simcore.training.card import corpus_line, creatures_lines, hardware_line, write_card
 
 
 def write_model_card(weights: Path, summary: dict, data_summary: dict, data_config: dict, command: str) -> Path:
@@ -23,6 +23,7 @@ def write_model_card(weights: Path, summary: dict, data_summary: dict, data_conf
         corpus_line(data_config),
         f"- {data_config['anny_bodies']} `anny` bodies (random phenotype; rigs in turn: "
         f"{', '.join(data_config.get('anny_rigs', ('mixamo', 'game_engine')))}), {data_config['anny_variants']} variants each",
+        *creatures_lines(data_config),
         f"- {data_config['variants']} variants of each corpus character: the bind pose, frames of its own clips and random poses "
         f"(±{data_config['pose_degrees']:g}°/√3 per axis) skinned with the artist weights, mid-edge subdivision on every other variant, "
         "a random turn about up and scale in [0.5, 2]",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from simcore.training.card import corpus_line, hardware_line, write_card
+from simcore.training.card import corpus_line, creatures_lines, hardware_line, write_card
 
 
 def write_skeleton_card(weights: Path, summary: dict, data_summary: dict, data_config: dict, command: str) -> Path:
@@ -20,6 +20,7 @@ def write_skeleton_card(weights: Path, summary: dict, data_summary: dict, data_c
         corpus_line(data_config),
         f"- {data_config['anny_bodies']} `anny` bodies (random phenotype; Mixamo rig → class `mixamo`, game-engine rig → class `vroid`), "
         f"{data_config['anny_variants']} variants each; corpus rigs → `mixamo` when the Mixamo body matches, else `articulation`",
+        *creatures_lines(data_config),
         f"- {data_config['variants']} variants of each corpus character: the bind pose, frames of its own clips and random poses "
         f"(±{data_config['pose_degrees']:g}°/√3 per axis) skinned with the artist weights, mid-edge subdivision on every other variant, "
         f"a random turn about up within ±{data_config['turn_degrees']:g}°",

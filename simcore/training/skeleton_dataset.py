@@ -2,14 +2,16 @@
 
 Same characters and augmentations as the skinning model's data (`characters.corpus_characters`,
 `anny_bodies`, `skin_samples.variants`): corpus `train` (re-posed by its clips and random poses, subdivided),
-corpus `val` as it comes (bind pose), anny bodies (train only). The skeleton model keeps the upload's facing,
-so variants are turned by at most ±`turn_degrees` about up instead of a full turn (scale does not matter: the
-tokens are normalised). A sample is `points` surface points with normals in the token frame, the class token
-and the token sequence of the character's used skin joints (those the evaluation scores against).
+corpus `val` as it comes (bind pose), anny bodies and procedural creatures (`creature_bodies`; train only).
+The skeleton model keeps the upload's facing, so variants are turned by at most ±`turn_degrees` about up
+instead of a full turn (scale does not matter: the tokens are normalised). A sample is `points` surface points
+with normals in the token frame, the class token and the token sequence of the character's used skin joints
+(those the evaluation scores against).
 
 Classes (the vocabulary's four UniRig slots): `mixamo` for a skeleton whose body matches the Mixamo template
 (anny's Mixamo rig, Mixamo-named corpus rigs), `vroid` for anny's game-engine rig (the second humanoid
-convention takes UniRig's other humanoid slot), `articulation` for every other corpus rig.
+convention takes UniRig's other humanoid slot), `none` (the slot left) for procedural creatures, whose bone-tube
+convention is not an artist's, and `articulation` for every other corpus rig.
 Deterministic by seed: character i of a source draws from default_rng([seed, source, i]).
 """
 
@@ -32,6 +34,7 @@ from simcore.training.sample_cache import fill_cache
 from simcore.training.skin_samples import Character, normalised, variants
 
 GAME_ENGINE_PREFIX = "anny_game_engine"  # anny_bodies names each body after its rig
+CREATURE_PREFIX = "creature_"  # creature_bodies.creature_name
 
 
 @dataclass(frozen=True)
@@ -42,6 +45,7 @@ class SkeletonDataConfig:
     variants: int = 8  # augmented copies of each training character
     anny_bodies: int = 64
     anny_variants: int = 3
+    creatures: int = 0  # procedural creatures (`creature_bodies`), made like anny bodies (anny_variants each)
     points: int = 4096  # surface points kept per sample (training draws a subset each step)
     pose_degrees: float = 35.0
     turn_degrees: float = 30.0  # largest turn about up either way
@@ -79,6 +83,8 @@ def skeleton_class(character: Character, skeleton: Skeleton, tokenizer: Skeleton
     """The class token's name for a character's skeleton (see the module docstring)."""
     if tokenizer.templates(skeleton)[0]:
         return "mixamo"
+    if character.name.startswith(CREATURE_PREFIX):
+        return "none"
     return "vroid" if character.name.startswith(GAME_ENGINE_PREFIX) else "articulation"
 
 
@@ -114,5 +120,5 @@ def build_skeleton_data(config: SkeletonDataConfig, out: Path, report: Callable[
 
     jobs, total = character_jobs(Path(config.corpus), config.seed, config.anny_bodies, skipped,
                                  train=augmented(config.variants), val=lambda c, rng: samples([normalised(c)], rng),
-                                 body=augmented(config.anny_variants))
+                                 body=augmented(config.anny_variants), creatures=config.creatures)
     return fill_cache(out, asdict(config), jobs, total, skipped, report, workers)

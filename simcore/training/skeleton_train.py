@@ -183,6 +183,8 @@ def train_skeleton(config: SkeletonTrainConfig, data: Path, out: Path, log: Path
         raise FileNotFoundError(f"no training or validation samples under {data}: run `rigforge train skeleton-data` first")
     cats = [s.category for s in train]
     counts = {c: cats.count(c) for c in sorted(set(cats))}
+    kinds = [SkeletonTokenizer.read_class(s.tokens.numpy()) for s in train]
+    classes = {c: kinds.count(c) for c in sorted(set(kinds))}  # inference decodes each class the model learned
     chance = np.array([1.0 / np.sqrt(counts[c]) for c in cats])
     chance /= chance.sum()
     model = SkeletonTokenModel(config.model)
@@ -196,6 +198,7 @@ def train_skeleton(config: SkeletonTrainConfig, data: Path, out: Path, log: Path
     best_step, running = 0, []
     with log.open("w", encoding="utf-8") as fh:
         fh.write(json.dumps({"event": "start", "train_samples": len(train), "val_samples": len(val), "categories": counts,
+                             "classes": classes,
                              "parameters": sum(p.numel() for p in model.parameters()), "config": asdict(config),
                              "val": best}) + "\n")
         for step in range(1, config.steps + 1):
@@ -228,7 +231,8 @@ def train_skeleton(config: SkeletonTrainConfig, data: Path, out: Path, log: Path
     if "j2j" not in best:
         best["j2j"] = val_j2j(model, val, config.points, config.decode_val)
     summary = {"best_step": best_step, "val": best, "val_at_start": start_val, "seconds": round(time.perf_counter() - started, 1),
-               "train_samples": len(train), "val_samples": len(val), "categories": counts, "config": asdict(config)}
+               "train_samples": len(train), "val_samples": len(val), "categories": counts, "classes": classes,
+               "config": asdict(config)}
     save_weights(model, out, summary)
     with log.open("a", encoding="utf-8") as fh:
         fh.write(json.dumps({"event": "end", **summary}) + "\n")

@@ -1,9 +1,9 @@
 """`rigforge train data`: the learned skinning model's training and validation samples, cached as .npz.
 
 Sources: the corpus (`MANIFEST.tsv` split `train` for training, `val` for model selection) with each file's
-own clips for re-posing, and `anny` bodies (train only). Validation samples are the characters as they come
-(bind pose, no augmentation). Deterministic by seed: character i of a source draws from
-default_rng([seed, source, i]). A sample already in the cache is kept (delete the folder to rebuild).
+own clips for re-posing, `anny` bodies and, when asked for, procedural creatures (`creature_bodies`; both train
+only). Validation samples are the characters as they come (bind pose, no augmentation). Deterministic by seed:
+character i of a source draws from default_rng([seed, source, i]). A sample already in the cache is kept (delete the folder to rebuild).
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ class DataConfig:
     anny_bodies: int = 48
     anny_variants: int = 2
     anny_rigs: tuple[str, ...] = ("mixamo", "game_engine")  # anny rig conventions, taken in turn (anny_bodies.ALL_RIGS)
+    creatures: int = 0  # procedural creatures (`creature_bodies`), made like anny bodies (anny_variants each)
     vertices: int = 3000  # kept per sample
     val_vertices: int = 4000
     pose_degrees: float = 35.0
@@ -56,5 +57,5 @@ def build_skin_data(config: DataConfig, out: Path, report: Callable[[str, int, i
     jobs, total = character_jobs(
         Path(config.corpus), config.seed, config.anny_bodies, skipped, train=posed(config.variants),
         val=lambda c, rng: [make_sample(normalised(c), rng, config.val_vertices, helpers=config.helpers).arrays()], body=posed(config.anny_variants),
-        rigs=config.anny_rigs)
+        rigs=config.anny_rigs, creatures=config.creatures)
     return fill_cache(out, asdict(config), jobs, total, skipped, report, workers)

@@ -84,3 +84,16 @@ def test_means_count_plausible_joint_counts_and_wins_over_the_voxel_baseline() -
     auto, voxel = evaluation.mean("auto"), evaluation.mean("voxel")
     assert auto["joint_ratio_ok"] == 0.5 and auto["beats_voxel"] == 0.5  # b has 3x the joints and a higher J2J
     assert voxel["joint_ratio_ok"] == 0.0 and "beats_voxel" not in voxel
+
+
+def test_model_option_scores_the_weights_it_is_given(small_dir, tmp_path) -> None:
+    """`--model`: the learned rows come from that file (a corrupt one is each asset's error row), never the shipped one."""
+    app = typer.Typer()
+    app.command()(eval_skeleton)
+    weights = tmp_path / "fresh.safetensors"
+    weights.write_bytes(b"not a safetensors file")
+    out = tmp_path / "report.json"
+    result = CliRunner().invoke(app, [str(small_dir), "--method", "learned", "--model", str(weights), "--json", str(out)])
+    assert result.exit_code == 0, result.output
+    rows = json.loads(out.read_text())["assets"]
+    assert len(rows) == 2 and all(r["error"] and "model_unavailable" in r["error"] and "fresh.safetensors" in r["error"] for r in rows)

@@ -44,6 +44,8 @@ def test_tiny_model_lowers_its_loss_and_ships_a_loadable_file(tmp_path: Path) ->
     assert len((tmp_path / "log.jsonl").read_text().splitlines()) >= 6
     skeleton, report = learned_skeleton(creature.vertices, creature.faces, candidates=4, model_path=out)
     assert skeleton.validate().num_joints == report["joints"] and len(report["candidates"]) == 4
+    assert summary["classes"] == {"articulation": 3}
+    assert {c["class"] for c in report["candidates"]} == {"articulation"}  # only the classes it was trained on
 
 
 def test_untrained_model_decodes_valid_trees_within_the_caps() -> None:
