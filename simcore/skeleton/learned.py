@@ -32,6 +32,7 @@ from simcore.skeleton.types import Skeleton
 
 WEIGHTS = Path(__file__).parent / "weights" / "skeleton_tokens.safetensors"
 GREEDY_CLASSES = ("articulation", "mixamo", "vroid", "none")  # those the model was trained on are decoded
+FIRST_CLASSES = GREEDY_CLASSES[:3]  # a file whose summary lists no classes was trained on these
 TEMPERATURE = 0.8
 CANDIDATES = 16  # decoded sequences per mesh: one greedy per class, the rest sampled
 SECTION_LIMIT = 6.0  # voxels of the quality score's solid: decoded joints are a few coordinate bins off
@@ -86,7 +87,7 @@ def learned_candidates(vertices: np.ndarray, faces: np.ndarray, shape: ShapeCont
     model = load_skeleton_model(model_path)
     summary = read_metadata(model_path, "skeleton", "skeleton")["summary"]
     points = int(summary["config"]["points"])
-    trained = summary.get("classes", {"articulation": 1, "mixamo": 1, "vroid": 1})  # older files list none: those three
+    trained = summary.get("classes", FIRST_CLASSES)
     greedy = [c for c in GREEDY_CLASSES if c in trained]
     cloud, norm = shape_points(vertices, faces, points, np.random.default_rng(seed))
     grammar = SkeletonGrammar(max_length=model.config.max_tokens, max_joints=max_joints)

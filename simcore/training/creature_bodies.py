@@ -11,7 +11,10 @@ artists' rigs. Plans and proportions are drawn from the generator passed in (det
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -22,12 +25,14 @@ from simcore.skeleton.types import Skeleton
 from simcore.skinning.proxy import simplified
 from simcore.training.skin_samples import Character
 
-PLANS = ("quadruped", "insect", "spider", "bird", "snake", "fish", "dragon", "raptor")
 CATEGORY = {"quadruped": "quadruped", "dragon": "quadruped", "bird": "bird"}  # every other plan is "other"
 GRID = 88  # voxels along the creature's longest side for marching cubes
 TARGET_VERTICES = 4000  # the meshed surface is decimated to about this many vertices
 BLEND = 0.15  # falloff of a tube's weight with its implicit value (0 on its surface, 1 at twice its radius)
 MAX_INFLUENCES = 4
+UP = (0.0, 1.0, 0.0)  # a flat tube's thin axis: wings, a bird's tail and side fins lie level
+SIDEWAYS = (1.0, 0.0, 0.0)  # upright fins
+NAME_PREFIX = "creature_"
 FLOOR = 1.5  # voxels: the thinnest tube's radius (and flat half-thickness) on the meshing grid
 
 
@@ -39,8 +44,8 @@ class Tube:
     b: int
     ra: float
     rb: float
-    thin: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
-    ratio: float = 1.0
+    thin: np.ndarray
+    ratio: float
 
 
 @dataclass
@@ -52,7 +57,7 @@ class Body:
     names: list[str] = field(default_factory=list)
     tubes: list[Tube] = field(default_factory=list)
 
-    def chain(self, name: str, points: list, parent: int, radii: list[float], *, thin: tuple = (0.0, 1.0, 0.0),
+    def chain(self, name: str, points: list, parent: int, radii: list[float], *, thin: tuple = UP,
               ratio: float = 1.0) -> list[int]:
         """Joints `name_01`, `name_02`, … at `points`, the first a child of `parent` (-1: a root); a tube runs
         from each joint's parent to it, `radii[k]` at joint k (one more radius than points when `parent` ≥ 0:
@@ -96,26 +101,37 @@ def tube_field(tube: Tube, positions: np.ndarray, x: np.ndarray, floor: float) -
     return np.sqrt((wide / r) ** 2 + (across / flat) ** 2 + (beyond / r) ** 2) - 1.0
 
 
-def grid_step(body: Body, grid: int = GRID) -> tuple[np.ndarray, float, np.ndarray]:
-    """(low corner, voxel size, high corner) of the grid that meshes the body: `grid` voxels along its longest
-    side, with room for the widest tube."""
+class Grid(NamedTuple):
+    """The voxel grid that meshes a body: low and high corners (3,), voxel size, and the thinnest tube it keeps."""
+
+    low: np.ndarray
+    high: np.ndarray
+    step: float
+
+    @property
+    def floor(self) -> float:
+        return FLOOR * self.step
+
+
+def meshing_grid(body: Body, voxels: int = GRID) -> Grid:
+    """`voxels` voxels along the body's longest side, with room for its widest tube."""
     positions = np.array(body.positions)
     reach = max(max(t.ra, t.rb) for t in body.tubes)
     low, high = positions.min(0) - 1.5 * reach, positions.max(0) + 1.5 * reach
-    return low, float((high - low).max()) / grid, high
+    return Grid(low, high, float((high - low).max()) / voxels)
 
 
-def surface(body: Body, grid: int = GRID) -> tuple[np.ndarray, np.ndarray]:
-    """(vertices, faces) of the union of the body's tubes, outward-facing, about TARGET_VERTICES vertices."""
+def surface(body: Body, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of the union of the body's tubes on `grid`, outward-facing, about TARGET_VERTICES
+    vertices."""
     positions = np.array(body.positions)
-    low, step, high = grid_step(body, grid)
-    axes = [np.arange(lo, hi + step, step) for lo, hi in zip(low, high)]
+    axes = [np.arange(lo, hi + grid.step, grid.step) for lo, hi in zip(grid.low, grid.high)]
     x = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
     value = np.full(len(x), np.inf)
     for tube in body.tubes:
-        np.minimum(value, tube_field(tube, positions, x, FLOOR * step), out=value)
-    verts, faces, _, _ = marching_cubes(-value.reshape([len(a) for a in axes]), 0.0, spacing=(step,) * 3)
-    mesh = trimesh.Trimesh(verts + low, faces[:, ::-1])
+        np.minimum(value, tube_field(tube, positions, x, grid.floor), out=value)
+    verts, faces, _, _ = marching_cubes(-value.reshape([len(a) for a in axes]), 0.0, spacing=(grid.step,) * 3)
+    mesh = trimesh.Trimesh(verts + grid.low, faces)
     mesh = max(mesh.split(only_watertight=False), key=lambda m: len(m.faces))  # drop specks marching cubes may leave
     if mesh.volume < 0:
         mesh.invert()
@@ -123,11 +139,10 @@ def surface(body: Body, grid: int = GRID) -> tuple[np.ndarray, np.ndarray]:
     return simplified(v, f, TARGET_VERTICES) if len(v) > TARGET_VERTICES else (v, f)
 
 
-def tube_weights(body: Body, vertices: np.ndarray) -> sp.csr_matrix:
-    """(V, J) rows summing to 1: each vertex on the start joints of the tubes nearest it (by implicit value),
-    blended over BLEND, at most MAX_INFLUENCES joints."""
+def tube_weights(body: Body, vertices: np.ndarray, floor: float) -> sp.csr_matrix:
+    """(V, J) rows summing to 1: each vertex on the start joints of the tubes nearest it (by implicit value, tubes
+    no thinner than `floor` as meshed), blended over BLEND, at most MAX_INFLUENCES joints."""
     positions = np.array(body.positions)
-    floor = FLOOR * grid_step(body)[1]
     value = np.stack([tube_field(t, positions, vertices, floor) for t in body.tubes], 1)
     share = np.exp(-(value - value.min(1, keepdims=True)) / BLEND)
     owner = np.array([t.a for t in body.tubes])
@@ -184,7 +199,7 @@ def wings(body: Body, rng: np.random.Generator, at: int, span: float, chord: flo
         else:
             points = [shoulder + np.array([s * 0.15 * span * u, 0.05 * span, -span * 0.6 * u]) for u in (0.35, 0.7, 1.0)]
         body.chain(f"wing_{side}", [shoulder, *points], at, [width * 0.5, chord * 0.6, chord, chord * 0.8, chord * 0.3],
-                   thin=(0.0, 1.0, 0.0), ratio=rng.uniform(0.12, 0.25))
+                   ratio=rng.uniform(0.12, 0.25))
 
 
 def trunk(body: Body, rng: np.random.Generator, length: float, height: float, count: int, girth: float,
@@ -209,7 +224,7 @@ def neck_head(body: Body, rng: np.random.Generator, chest: int, length: float, u
 
 
 def tail(body: Body, rng: np.random.Generator, pelvis: int, length: float, count: int, radius: float,
-         droop: float, *, thin: tuple = (0.0, 1.0, 0.0), ratio: float = 1.0) -> None:
+         droop: float, *, thin: tuple = UP, ratio: float = 1.0) -> None:
     """A tail of `count` joints back from `pelvis`, tapering, drooping by `droop`, swaying at random."""
     if count <= 0:
         return
@@ -220,92 +235,111 @@ def tail(body: Body, rng: np.random.Generator, pelvis: int, length: float, count
     body.chain("tail", points, pelvis, radii, thin=thin, ratio=ratio)
 
 
-def creature(plan: str, rng: np.random.Generator) -> Body:
-    """One random body of the given plan (of PLANS)."""
-    b = Body()
+def four_legged(b: Body, rng: np.random.Generator, *, winged: bool) -> None:
+    """A quadruped (a tail of 0–6 joints) or, `winged`, a dragon (wings and a tail of 4–6)."""
     u = rng.uniform
-    if plan in ("quadruped", "dragon"):
-        length, girth = u(0.8, 1.6), u(0.12, 0.25)
-        leg = u(0.35, 1.0) * length
-        spine = trunk(b, rng, length, leg + girth * 0.5, int(rng.integers(3, 6)), girth)
-        neck_head(b, rng, spine[-1], u(0.15, 0.5) * length, u(0.1, 0.5) * length, girth * u(0.6, 1.1), girth * 0.55)
-        tail(b, rng, spine[0], u(0.3, 1.2) * length, int(rng.integers(0 if plan == "quadruped" else 4, 7)), girth * 0.45, u(0.0, 0.4) * leg)
-        for at, name in ((spine[-1], "leg_front"), (spine[0], "leg_back")):
-            legs(b, rng, at, name, girth * 0.7, leg, girth * u(0.25, 0.4), "mammal")
-        if plan == "dragon":
-            wings(b, rng, spine[-1], u(0.8, 1.5) * length, girth * u(1.0, 2.0), girth * 0.6)
-    elif plan in ("insect", "spider"):
-        length, girth = u(0.6, 1.2), u(0.1, 0.2)
-        height = u(0.2, 0.5) * length
-        spine = trunk(b, rng, length, height, 3, girth)
-        b.tubes[-1].rb *= u(1.0, 1.6)  # a thorax or abdomen larger than the rest
-        neck_head(b, rng, spine[-1], 0.05 * length, 0.0, girth * u(0.6, 1.0), girth * 0.5)
-        pairs = 3 if plan == "insect" else 4
-        for k in range(pairs):
-            forward = (k - (pairs - 1) / 2) * girth * 0.5
-            legs(b, rng, spine[1], f"leg_{k + 1}", girth * 0.8, u(0.6, 1.2) * length, girth * u(0.15, 0.3),
-                 "arthropod", forward)
-    elif plan in ("bird", "raptor"):
-        length, girth = u(0.5, 1.0), u(0.15, 0.28)
-        leg = u(0.4, 1.0) * length
-        spine = trunk(b, rng, length, leg + girth * 0.5, int(rng.integers(2, 5)), girth,
-                      rise=u(0.1, 0.5) * length)
-        neck_head(b, rng, spine[-1], u(0.1, 0.4) * length, u(0.2, 0.6) * length, girth * u(0.5, 0.8), girth * 0.4)
-        legs(b, rng, spine[0], "leg", girth * 0.5, leg, girth * u(0.15, 0.3), "mammal")
-        if plan == "bird":
-            wings(b, rng, spine[-1], u(0.8, 1.8) * length, girth * u(0.8, 1.6), girth * 0.6)
-            tail(b, rng, spine[0], u(0.3, 0.6) * length, int(rng.integers(1, 3)), girth * 0.8, 0.1 * leg,
-                 thin=(0.0, 1.0, 0.0), ratio=0.3)
-        else:
-            tail(b, rng, spine[0], u(0.8, 1.5) * length, int(rng.integers(3, 7)), girth * 0.6, u(0.0, 0.3) * leg)
-            arm = u(0.2, 0.5) * length
-            for side, s in (("L", 1.0), ("R", -1.0)):
-                shoulder = b.positions[spine[-1]] + np.array([s * girth * 0.8, -girth * 0.2, girth * 0.2])
-                points = [shoulder, shoulder + np.array([s * 0.1 * arm, -0.5 * arm, 0.3 * arm]),
-                          shoulder + np.array([s * 0.1 * arm, -0.6 * arm, 0.9 * arm])]
-                b.chain(f"arm_{side}", points, spine[-1], [girth * 0.5, girth * 0.25, girth * 0.2, girth * 0.12])
-    elif plan == "snake":
-        length, girth = u(2.0, 4.0), u(0.04, 0.08)
-        count = int(rng.integers(8, 17))
-        start = np.array([0.0, girth * 4.0, -length / 2])
-        points = [start] + arc(start, start + np.array([0.0, 0.0, length]), count - 1, sway=u(0.1, 0.3) * length,
-                               waves=float(rng.integers(2, 5)))
-        for p in points:
-            p[1] = girth * 4.0
-        radii = list(np.linspace(girth * 0.5, girth * 4.0, count // 2)) + [girth * 4.0] * (count - count // 2)
-        spine = b.chain("spine", points, -1, radii)
-        b.chain("head", [points[-1] + np.array([0.0, 0.0, girth * 6]), points[-1] + np.array([0.0, 0.0, girth * 14])],
-                spine[-1], [girth * 4.0, girth * 4.5, girth * 2.5])
-    else:  # fish
-        length, girth = u(0.6, 1.4), u(0.1, 0.22)
-        spine = trunk(b, rng, length, u(0.5, 1.0), int(rng.integers(3, 7)), girth)
-        for k, j in enumerate(b.tubes):
-            j.ra *= 0.6 + 0.4 * np.sin(np.pi * (k + 0.5) / len(b.tubes))
-            j.rb *= 0.6 + 0.4 * np.sin(np.pi * (k + 1.0) / len(b.tubes))
-        front = b.positions[spine[-1]]
-        b.chain("head", [front + np.array([0.0, 0.0, girth * 0.3]), front + np.array([0.0, 0.0, girth * u(1.0, 2.0)])],
-                spine[-1], [girth * 0.8, girth * 0.8, girth * 0.5])
-        tail(b, rng, spine[0], u(0.2, 0.4) * length, 2, girth * 1.5, 0.0, thin=(1.0, 0.0, 0.0), ratio=0.12)
-        mid = spine[len(spine) // 2]
-        top = b.positions[mid] + np.array([0.0, girth * 0.8, 0.0])
-        b.chain("fin_dorsal", [top, top + np.array([0.0, girth * 1.2, -0.1 * length])], mid,
-                [girth * 0.6, girth * 0.6, girth * 0.3], thin=(1.0, 0.0, 0.0), ratio=0.15)
-        for side, s in (("L", 1.0), ("R", -1.0)):
-            base = front + np.array([s * girth * 0.8, -girth * 0.4, -girth * 0.3])
-            b.chain(f"fin_{side}", [base, base + np.array([s * girth * 1.7, -girth * 0.2, -girth])], spine[-1],
-                    [girth * 0.5, girth * 0.5, girth * 0.3], thin=(0.0, 1.0, 0.0), ratio=0.15)
-    return b
+    length, girth = u(0.8, 1.6), u(0.12, 0.25)
+    leg = u(0.35, 1.0) * length
+    spine = trunk(b, rng, length, leg + girth * 0.5, int(rng.integers(3, 6)), girth)
+    neck_head(b, rng, spine[-1], u(0.15, 0.5) * length, u(0.1, 0.5) * length, girth * u(0.6, 1.1), girth * 0.55)
+    tail(b, rng, spine[0], u(0.3, 1.2) * length, int(rng.integers(4 if winged else 0, 7)), girth * 0.45, u(0.0, 0.4) * leg)
+    for at, name in ((spine[-1], "leg_front"), (spine[0], "leg_back")):
+        legs(b, rng, at, name, girth * 0.7, leg, girth * u(0.25, 0.4), "mammal")
+    if winged:
+        wings(b, rng, spine[-1], u(0.8, 1.5) * length, girth * u(1.0, 2.0), girth * 0.6)
+
+
+def arthropod(b: Body, rng: np.random.Generator, *, pairs: int) -> None:
+    """An insect (3 pairs of legs) or a spider (4): a three-joint body, one end swollen, legs from its middle."""
+    u = rng.uniform
+    length, girth = u(0.6, 1.2), u(0.1, 0.2)
+    spine = trunk(b, rng, length, u(0.2, 0.5) * length, 3, girth)
+    b.tubes[-1].rb *= u(1.0, 1.6)  # a thorax or abdomen larger than the rest
+    neck_head(b, rng, spine[-1], 0.05 * length, 0.0, girth * u(0.6, 1.0), girth * 0.5)
+    for k in range(pairs):
+        forward = (k - (pairs - 1) / 2) * girth * 0.5
+        legs(b, rng, spine[1], f"leg_{k + 1}", girth * 0.8, u(0.6, 1.2) * length, girth * u(0.15, 0.3), "arthropod",
+             forward)
+
+
+def two_legged(b: Body, rng: np.random.Generator, *, bird: bool) -> None:
+    """A bird (wings, a short flat tail) or a raptor-like biped (a long tail, short arms), the body leaning up."""
+    u = rng.uniform
+    length, girth = u(0.5, 1.0), u(0.15, 0.28)
+    leg = u(0.4, 1.0) * length
+    spine = trunk(b, rng, length, leg + girth * 0.5, int(rng.integers(2, 5)), girth, rise=u(0.1, 0.5) * length)
+    neck_head(b, rng, spine[-1], u(0.1, 0.4) * length, u(0.2, 0.6) * length, girth * u(0.5, 0.8), girth * 0.4)
+    legs(b, rng, spine[0], "leg", girth * 0.5, leg, girth * u(0.15, 0.3), "mammal")
+    if bird:
+        wings(b, rng, spine[-1], u(0.8, 1.8) * length, girth * u(0.8, 1.6), girth * 0.6)
+        tail(b, rng, spine[0], u(0.3, 0.6) * length, int(rng.integers(1, 3)), girth * 0.8, 0.1 * leg, ratio=0.3)
+        return
+    tail(b, rng, spine[0], u(0.8, 1.5) * length, int(rng.integers(3, 7)), girth * 0.6, u(0.0, 0.3) * leg)
+    arm = u(0.2, 0.5) * length
+    for side, s in (("L", 1.0), ("R", -1.0)):
+        shoulder = b.positions[spine[-1]] + np.array([s * girth * 0.8, -girth * 0.2, girth * 0.2])
+        points = [shoulder, shoulder + np.array([s * 0.1 * arm, -0.5 * arm, 0.3 * arm]),
+                  shoulder + np.array([s * 0.1 * arm, -0.6 * arm, 0.9 * arm])]
+        b.chain(f"arm_{side}", points, spine[-1], [girth * 0.5, girth * 0.25, girth * 0.2, girth * 0.12])
+
+
+def snake(b: Body, rng: np.random.Generator) -> None:
+    """A long winding body of 8–16 joints on the ground, thick from its middle forward, and a head."""
+    u = rng.uniform
+    length, girth = u(2.0, 4.0), u(0.04, 0.08)
+    count = int(rng.integers(8, 17))
+    start = np.array([0.0, girth * 4.0, -length / 2])
+    points = [start] + arc(start, start + np.array([0.0, 0.0, length]), count - 1, sway=u(0.1, 0.3) * length,
+                           waves=float(rng.integers(2, 5)))
+    for p in points:
+        p[1] = girth * 4.0
+    radii = list(np.linspace(girth * 0.5, girth * 4.0, count // 2)) + [girth * 4.0] * (count - count // 2)
+    spine = b.chain("spine", points, -1, radii)
+    b.chain("head", [points[-1] + np.array([0.0, 0.0, girth * 6]), points[-1] + np.array([0.0, 0.0, girth * 14])],
+            spine[-1], [girth * 4.0, girth * 4.5, girth * 2.5])
+
+
+def fish(b: Body, rng: np.random.Generator) -> None:
+    """A body swelling in the middle, a head, a flat upright tail fin, a dorsal fin and two flat side fins."""
+    u = rng.uniform
+    length, girth = u(0.6, 1.4), u(0.1, 0.22)
+    spine = trunk(b, rng, length, u(0.5, 1.0), int(rng.integers(3, 7)), girth)
+    for k, tube in enumerate(b.tubes):
+        tube.ra *= 0.6 + 0.4 * np.sin(np.pi * (k + 0.5) / len(b.tubes))
+        tube.rb *= 0.6 + 0.4 * np.sin(np.pi * (k + 1.0) / len(b.tubes))
+    front = b.positions[spine[-1]]
+    b.chain("head", [front + np.array([0.0, 0.0, girth * 0.3]), front + np.array([0.0, 0.0, girth * u(1.0, 2.0)])],
+            spine[-1], [girth * 0.8, girth * 0.8, girth * 0.5])
+    tail(b, rng, spine[0], u(0.2, 0.4) * length, 2, girth * 1.5, 0.0, thin=SIDEWAYS, ratio=0.12)
+    mid = spine[len(spine) // 2]
+    top = b.positions[mid] + np.array([0.0, girth * 0.8, 0.0])
+    b.chain("fin_dorsal", [top, top + np.array([0.0, girth * 1.2, -0.1 * length])], mid,
+            [girth * 0.6, girth * 0.6, girth * 0.3], thin=SIDEWAYS, ratio=0.15)
+    for side, s in (("L", 1.0), ("R", -1.0)):
+        base = front + np.array([s * girth * 0.8, -girth * 0.4, -girth * 0.3])
+        b.chain(f"fin_{side}", [base, base + np.array([s * girth * 1.7, -girth * 0.2, -girth])], spine[-1],
+                [girth * 0.5, girth * 0.5, girth * 0.3], ratio=0.15)
+
+
+BUILDERS: dict[str, Callable[[Body, np.random.Generator], None]] = {
+    "quadruped": partial(four_legged, winged=False), "insect": partial(arthropod, pairs=3),
+    "spider": partial(arthropod, pairs=4), "bird": partial(two_legged, bird=True), "snake": snake, "fish": fish,
+    "dragon": partial(four_legged, winged=True), "raptor": partial(two_legged, bird=False),
+}
+PLANS = tuple(BUILDERS)  # creature k has plan PLANS[k % len(PLANS)]
 
 
 def creature_name(k: int) -> str:
     """The name of creature k (its plan is PLANS taken in turn)."""
-    return f"creature_{PLANS[k % len(PLANS)]}_{k:04d}"
+    return f"{NAME_PREFIX}{PLANS[k % len(PLANS)]}_{k:04d}"
 
 
 def creature_character(k: int, rng: np.random.Generator) -> Character:
     """Creature k (PLANS taken in turn) drawn from `rng`, meshed and weighted."""
     plan = PLANS[k % len(PLANS)]
-    body = creature(plan, rng)
-    vertices, faces = surface(body)
+    body = Body()
+    BUILDERS[plan](body, rng)
+    grid = meshing_grid(body)
+    vertices, faces = surface(body, grid)
     return Character(creature_name(k), CATEGORY.get(plan, "other"), vertices, faces, body.skeleton(),
-                     tube_weights(body, vertices))
+                     tube_weights(body, vertices, grid.floor))

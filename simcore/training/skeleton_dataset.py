@@ -29,12 +29,12 @@ from simcore.metrics.skeleton import used_skeleton
 from simcore.skeleton.shape_points import shape_points
 from simcore.skeleton.tokenizer import SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
+from simcore.training import creature_bodies
 from simcore.training.characters import Make, character_jobs
 from simcore.training.sample_cache import fill_cache
 from simcore.training.skin_samples import Character, normalised, variants
 
 GAME_ENGINE_PREFIX = "anny_game_engine"  # anny_bodies names each body after its rig
-CREATURE_PREFIX = "creature_"  # creature_bodies.creature_name
 
 
 @dataclass(frozen=True)
@@ -83,7 +83,7 @@ def skeleton_class(character: Character, skeleton: Skeleton, tokenizer: Skeleton
     """The class token's name for a character's skeleton (see the module docstring)."""
     if tokenizer.templates(skeleton)[0]:
         return "mixamo"
-    if character.name.startswith(CREATURE_PREFIX):
+    if character.name.startswith(creature_bodies.NAME_PREFIX):
         return "none"
     return "vroid" if character.name.startswith(GAME_ENGINE_PREFIX) else "articulation"
 

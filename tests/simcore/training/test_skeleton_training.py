@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from simcore.geometry.capsule_creatures import quadruped
-from simcore.model_weights import ModelUnavailable
+from simcore.model_weights import ModelUnavailable, save_weights
 from simcore.skeleton.grammar import SkeletonGrammar
 from simcore.skeleton.learned import learned_skeleton, load_skeleton_model
 from simcore.skeleton.learned_model import SkeletonModelConfig, SkeletonTokenModel, sequence_slots
@@ -46,6 +46,19 @@ def test_tiny_model_lowers_its_loss_and_ships_a_loadable_file(tmp_path: Path) ->
     assert skeleton.validate().num_joints == report["joints"] and len(report["candidates"]) == 4
     assert summary["classes"] == {"articulation": 3}
     assert {c["class"] for c in report["candidates"]} == {"articulation"}  # only the classes it was trained on
+
+
+@pytest.mark.parametrize(("classes", "decoded"), [(None, {"articulation", "mixamo", "vroid"}),
+                                                 ({"articulation": 5, "none": 2}, {"articulation", "none"})])
+def test_a_file_decodes_the_classes_it_was_trained_on(tmp_path: Path, classes: dict | None, decoded: set[str]) -> None:
+    """A summary without `classes` (files trained before creatures) decodes the first three classes."""
+    torch.manual_seed(0)
+    path = tmp_path / "skeleton.safetensors"
+    summary = {"config": {"points": 256}, **({"classes": classes} if classes else {})}
+    save_weights(SkeletonTokenModel(TINY).eval(), path, summary)
+    vertices, faces, _ = quadruped(count=6)
+    _, report = learned_skeleton(vertices, faces, candidates=4, model_path=path)
+    assert {c["class"] for c in report["candidates"]} == decoded
 
 
 def test_untrained_model_decodes_valid_trees_within_the_caps() -> None:
