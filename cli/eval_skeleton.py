@@ -24,7 +24,7 @@ def _delta(value: float | None) -> str:
     return "-" if value is None else f"{value:+.4f}"
 
 
-def _metric_cells(row: dict) -> list[str]:
+def metric_cells(row: dict) -> list[str]:
     if "j2j" not in row:
         return ["-", "-", "-", "-", "-"]
     return [_fmt(row["j2j"]), _fmt(row["j2b"]), _fmt(row["b2b"]),
@@ -36,7 +36,7 @@ def render(report: dict, console: Console) -> None:
     table = Table(*_COLUMNS, title="Skeleton evaluation (unit-cube units: GT mesh bbox, longest side 1)")
     for row in report["assets"]:
         note = row.get("error") or row.get("note") or ""
-        table.add_row(row["name"], row["category"], row["method"], *_metric_cells(row), _fmt(row["seconds"], 2), note)
+        table.add_row(row["name"], row["category"], row["method"], *metric_cells(row), _fmt(row["seconds"], 2), note)
     for method, mean in report["mean"].items():
         note = f"{mean['assets']} assets" + (f", {mean['failed']} failed" if mean["failed"] else "")
         if "joint_ratio_ok" in mean:
@@ -45,13 +45,13 @@ def render(report: dict, console: Console) -> None:
             note += f", beats voxel {mean['beats_voxel']:.0%}"
         if "j2j_matched" in mean:
             note += f", J2J without extra joints {mean['j2j_matched']:.4f}"
-        table.add_row("MEAN", "", method, *_metric_cells(mean), _fmt(mean.get("seconds"), 2), note, style="bold")
+        table.add_row("MEAN", "", method, *metric_cells(mean), _fmt(mean.get("seconds"), 2), note, style="bold")
     console.print(table)
     cats = Table("category", "method", "assets", "J2J", "J2B", "B2B", "joints pred/gt", "inside", title="Per-category means")
     for method, by_cat in report["by_category"].items():
         for category, mean in by_cat.items():
             if mean["assets"]:
-                cats.add_row(category, method, str(mean["assets"]), *_metric_cells(mean))
+                cats.add_row(category, method, str(mean["assets"]), *metric_cells(mean))
     console.print(cats)
     tokens = report["tokens"]
     if tokens["skeletons"]:

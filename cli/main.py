@@ -20,6 +20,7 @@ from cli import (
     server,
     submit,
     train,
+    train_skeleton_cv,
     train_skin_cv,
     validate,
 )
@@ -38,6 +39,7 @@ app.command()(validate.validate)
 app.command()(fit.fit)
 app.add_typer(eval_app, name="eval")
 train.app.command("skin-cv")(train_skin_cv.skin_cv)
+train.app.command("skeleton-cv")(train_skeleton_cv.skeleton_cv)
 app.add_typer(train.app, name="train")
 eval_app.command("skeleton")(eval_skeleton.eval_skeleton)
 eval_app.command("skin")(eval_skin.eval_skin)

@@ -17,33 +17,19 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from cli.eval_skin import METRIC_HEADS, PRIOR_SHARE_HELP, metric_cells
+from cli.fold_table import render_folds
 from cli.progress import count_bar
 from cli.train import DEFAULT_CONFIG, ConfigOption, corpus_of, read_config, train_section
 
 
 def render(result: dict, console: Console) -> None:
     """Per fold and overall (per category): learned against geodesic on the held-out characters."""
-    table = Table(title="Skinning by held-out source family (deformation in unit-cube units: random poses | own clips)")
-    for head in ("fold / category", "method"):
-        table.add_column(head)
-    for head in ("assets", *METRIC_HEADS):
-        table.add_column(head, justify="right")
     summary = result["summary"]
-    sections = [(f"fold {f['fold']} ({len(f['held_out'])} held out, best step {f['best_step']})", f["mean"])
-                for f in result["folds"]]
-    sections += [(f"ALL ({c})", means) for c, means in summary["by_category"].items()]
-    sections.append(("ALL", summary["mean"]))
-    for title, means in sections:
-        for i, (method, mean) in enumerate(means.items()):
-            table.add_row(title if i == 0 else "", method, str(mean["assets"]), *metric_cells(mean),
-                          end_section=i == len(means) - 1, style="bold" if title == "ALL" else None)
-    console.print(table)
-    console.print(f"learned has the lower L1 on {summary['learned_wins_l1']} of {summary['compared']} held-out characters")
-    for error in summary["errors"]:
-        console.print(f"[red]error[/] {error}")
+    render_folds(result, console, "Skinning by held-out source family (deformation in unit-cube units: random poses | "
+                 "own clips)", ("assets", *METRIC_HEADS), lambda mean: [str(mean["assets"]), *metric_cells(mean)],
+                 f"learned has the lower L1 on {summary['learned_wins_l1']} of {summary['compared']} held-out characters")
 
 
 def skin_cv(

@@ -80,14 +80,17 @@ def split_files(directory: Path, split: str) -> list[Path]:
     return sorted(Path(directory) / r["file"].strip() for r in rows)
 
 
-def asset_files(directory: Path, split: str | None = None) -> list[Path]:
-    """The .glb/.gltf files of `directory` by name, or with `split` the files MANIFEST.tsv lists for that split."""
+def asset_files(directory: Path, split: str | None = None, names: Collection[str] | None = None) -> list[Path]:
+    """The .glb/.gltf files of `directory` by name, or with `split` the files MANIFEST.tsv lists for that split;
+    with `names`, only those file stems."""
     directory = Path(directory)
     if not directory.is_dir():
         raise InvalidInput(f"{directory} is not a directory", code="not_a_directory", field="dir")
     if split:
-        return split_files(directory, split)
-    return sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf"))
+        files = split_files(directory, split)
+    else:
+        files = sorted(p for p in directory.iterdir() if p.suffix.lower() in (".glb", ".gltf"))
+    return files if names is None else [p for p in files if p.stem in names]
 
 
 def rigged_assets(
@@ -101,9 +104,7 @@ def rigged_assets(
     Files that do not read as a rig (no skin, malformed) go to `skipped` as name → "code: message".
     """
     categories = read_categories(directory)
-    for path in asset_files(directory, split):
-        if names is not None and path.stem not in names:
-            continue
+    for path in asset_files(directory, split, names):
         try:
             doc = GltfDocument.from_bytes(path.read_bytes())
             asset = read_rigged_asset(doc)

@@ -17,7 +17,7 @@ among (humanoid, geometric): the same skeletons those methods give as job option
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -231,15 +231,15 @@ def evaluate_asset(name: str, category: str, case: EvalCase, methods: list[str],
 
 def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int = 64, split: str | None = None,
                        on_asset: Callable[[str], None] | None = None,
-                       geometric_params: GeometricParams | None = None, learned_model: Path | None = None
-                       ) -> SkeletonEvaluation:
+                       geometric_params: GeometricParams | None = None, learned_model: Path | None = None,
+                       names: Collection[str] | None = None) -> SkeletonEvaluation:
     """Evaluate every rigged .glb/.gltf in `directory` with `method` ("all", "voxel", "auto", ...); with `split`,
-    only the files `directory`/MANIFEST.tsv lists for that split (the corpus layout); `learned_model`: the
-    learned method's weights to score instead of the shipped file."""
+    only the files `directory`/MANIFEST.tsv lists for that split (the corpus layout); with `names`, only those
+    file stems; `learned_model`: the learned method's weights to score instead of the shipped file."""
     methods = resolve_methods(method)
     report = SkeletonEvaluation()
     categories = read_categories(directory)
-    for path in asset_files(directory, split):
+    for path in asset_files(directory, split, names):
         name = path.stem
         if on_asset is not None:
             on_asset(name)

@@ -22,6 +22,11 @@ BUILD_ERRORS = (SimcoreError, ValueError, np.linalg.LinAlgError)  # one characte
 _FORKED: tuple[Path, Sequence[Job]] | None = None  # what the forked builders read (closures cannot be pickled)
 
 
+def sample_character(path: Path) -> str:
+    """The character a cached sample file was made from (`<character>_<k>.npz`, this cache's layout)."""
+    return path.stem.rsplit("_", 1)[0]
+
+
 def save_sample(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
     """Write one sample's arrays as .npz, atomically (a killed build never leaves half a file)."""
     path.parent.mkdir(parents=True, exist_ok=True)

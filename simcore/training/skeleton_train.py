@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -28,6 +28,7 @@ from simcore.skeleton.learned_model import SLOT_AXES, SkeletonModelConfig, Skele
 from simcore.skeleton.token_decoding import decode_tokens
 from simcore.skeleton.tokenizer import Normalization, SkeletonTokenizer
 from simcore.skeleton.vocab import CLASS_TOKENS, NUM_BINS, PAD, VOCAB_SIZE, dequantize, quantize
+from simcore.training.sample_cache import sample_character
 from simcore.training.skeleton_dataset import SkeletonSample
 
 
@@ -48,6 +49,7 @@ class SkeletonTrainConfig:
     log_every: int = 50
     seed: int = 0
     threads: int = 2
+    exclude: tuple[str, ...] = ()  # training characters left out (held-out families: skeleton_family_cv.py)
     model: SkeletonModelConfig = field(default_factory=SkeletonModelConfig)
 
 
@@ -62,11 +64,13 @@ class LoadedSample:
     category: str
 
 
-def load_skeleton_samples(folder: Path, max_tokens: int) -> list[LoadedSample]:
-    """Every .npz sample in `folder` whose sequence fits `max_tokens`."""
+def load_skeleton_samples(folder: Path, max_tokens: int, exclude: Collection[str] = ()) -> list[LoadedSample]:
+    """Every .npz sample in `folder` whose sequence fits `max_tokens`, but those of the `exclude`d characters."""
     grammar = SkeletonGrammar(max_length=max_tokens)
     out = []
     for path in sorted(folder.glob("*.npz")):
+        if sample_character(path) in exclude:
+            continue
         with np.load(path, allow_pickle=False) as data:
             s = SkeletonSample.from_arrays(dict(data))
         if len(s.tokens) <= max_tokens:
@@ -177,7 +181,7 @@ def train_skeleton(config: SkeletonTrainConfig, data: Path, out: Path, log: Path
     torch.manual_seed(config.seed)
     torch.set_num_threads(config.threads)
     rng = np.random.default_rng(config.seed)
-    train = load_skeleton_samples(data / "train", config.model.max_tokens)
+    train = load_skeleton_samples(data / "train", config.model.max_tokens, set(config.exclude))
     val = load_skeleton_samples(data / "val", config.model.max_tokens)
     if not train or not val:
         raise FileNotFoundError(f"no training or validation samples under {data}: run `rigforge train skeleton-data` first")

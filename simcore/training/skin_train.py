@@ -25,6 +25,7 @@ from torch.optim.swa_utils import AveragedModel, get_ema_multi_avg_fn
 from simcore.model_weights import save_weights
 from simcore.skinning.attention_model import ModelConfig, SkinAttention
 from simcore.training.fold_pool import step_reporter
+from simcore.training.sample_cache import sample_character
 from simcore.training.skin_samples import SkinSample
 
 
@@ -59,11 +60,6 @@ def sample_tensors(s: SkinSample, device: str = "cpu") -> Tensors:
     arrays = {"pair": i.pair, "bone": i.bone, "point": i.point, "candidates": i.candidates, "prior": i.prior,
               "target": s.target, "outside": s.outside, "moved": s.moved, "posed": s.posed}
     return {k: torch.from_numpy(v).to(device) for k, v in arrays.items()}
-
-
-def sample_character(path: Path) -> str:
-    """The character a cached sample file was made from (`<character>_<k>.npz`, sample_cache's layout)."""
-    return path.stem.rsplit("_", 1)[0]
 
 
 def load_samples(folder: Path, device: str = "cpu", exclude: Collection[str] = ()) -> tuple[list[Tensors], list[str]]:

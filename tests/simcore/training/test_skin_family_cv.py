@@ -24,22 +24,7 @@ from simcore.skinning.learned import SHIPPED
 from simcore.training.skin_dataset import DataConfig, build_skin_data
 from simcore.training.skin_family_cv import family_cv, stored_members_cv
 from simcore.training.skin_train import TrainConfig, load_samples
-from tests.simcore.io.studio_rig_fixtures import studio_rig, to_glb
-
-HEADER = "name\tfile\tcategory\tsplit\tnotes\n"
-
-
-def corpus(tmp_path: Path, rows: list[tuple[str, str, str]]) -> Path:
-    """A corpus folder of small rigs: rows of (name, split, notes), MANIFEST.tsv in the corpus layout."""
-    root = tmp_path / "corpus"
-    (root / "rigged").mkdir(parents=True)
-    glb = to_glb(studio_rig(["hips", "spine", "head"]))
-    lines = [HEADER]
-    for name, split, notes in rows:
-        (root / "rigged" / f"{name}.glb").write_bytes(glb)
-        lines.append(f"{name}\trigged/{name}.glb\thumanoid\t{split}\t{notes}\n")
-    (root / "MANIFEST.tsv").write_text("".join(lines))
-    return root
+from tests.simcore.training.corpus_fixture import assert_each_held_out_once, corpus
 
 
 def test_folds_keep_families_whole_and_balance_their_sizes(tmp_path: Path) -> None:
@@ -65,16 +50,7 @@ def test_every_train_character_is_scored_once_by_a_model_that_never_saw_it(tmp_p
                          model=ModelConfig(width=8, heads=2, bone_layers=1))
     reports: list[tuple[int, int]] = []
     result = family_cv(config, cache, root, 2, tmp_path / "cv", 1, lambda done, total: reports.append((done, total)))
-    held = [f["held_out"] for f in result["folds"]]
-    assert sorted(sum(held, [])) == ["a1", "a2", "b1", "c1"] and ["a1", "a2"] in held
-    for fold in result["folds"]:
-        assert fold["train_samples"] == 2 * (4 - len(fold["held_out"]))
-        assert fold["mean"]["learned"]["assets"] == fold["mean"]["geodesic"]["assets"] == len(fold["held_out"])
-    scored = sorted((r["name"], r["method"]) for r in result["assets"])
-    assert scored == sorted((n, m) for n in ("a1", "a2", "b1", "c1") for m in ("learned", "geodesic"))
-    summary = result["summary"]
-    assert summary["compared"] == 4 and not summary["errors"] and summary["mean"]["learned"]["assets"] == 4
-    assert reports[-1] == (6, 6) and len(reports) == len(set(reports))  # one report per change
+    assert_each_held_out_once(result, "geodesic", ["a1", "a2", "b1", "c1"], 2, reports, 6)
     out = io.StringIO()
     render(result, Console(file=out, width=160))
     assert "of 4 held-out characters" in out.getvalue() and "ALL (humanoid)" in out.getvalue()
