@@ -4,11 +4,15 @@ without its held-out characters and predicts their skeletons through the `learne
 from __future__ import annotations
 
 import io
+import json
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import pytest
 from rich.console import Console
+from typer.testing import CliRunner
 
+from cli.main import app
 from cli.train_skeleton_cv import render
 from simcore.evaluation.skeleton_eval import evaluate_directory
 from simcore.skeleton.learned_model import SkeletonModelConfig
@@ -41,6 +45,15 @@ def test_every_train_character_is_scored_once_by_a_model_that_never_saw_it(tmp_p
     out = io.StringIO()
     render(result, Console(file=out, width=160))
     assert "of 4 held-out characters" in out.getvalue() and "ALL (humanoid)" in out.getvalue()
+    # The command reads the corpus from the config's skeleton data section and writes cv.json.
+    spec = {"cache": str(cache), "data": {"corpus": str(root), "max_tokens": 128},
+            "train": {**asdict(replace(config, steps=1)), "model": asdict(TINY)}}
+    (tmp_path / "config.json").write_text(json.dumps(spec))
+    command = CliRunner().invoke(app, ["train", "skeleton-cv", "--config", str(tmp_path / "config.json"), "--folds", "2",
+                                       "--out", str(tmp_path / "cli")])
+    assert command.exit_code == 0, command.output
+    written = json.loads((tmp_path / "cli" / "cv.json").read_text())
+    assert sorted(r["name"] for r in written["assets"] if r["method"] == "learned") == ["a1", "a2", "b1", "c1"]
 
 
 def test_excluded_characters_leave_the_training_samples(tmp_path: Path) -> None:
