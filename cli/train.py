@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Protocol, TypeVar
+from typing import Annotated, TypeVar
 
 import typer
 from rich.console import Console
@@ -32,20 +32,11 @@ def read_config(config: Path) -> dict:
     return json.loads(config.read_text(encoding="utf-8"))
 
 
-class DataSection(Protocol):
-    """A data section's config (the skinning or the skeleton model's): it names the corpus."""
+def corpus_of(spec: dict) -> Path:
+    """The corpus folder the config's "data" section names (both data builders' default when it names none)."""
+    from simcore.training.characters import CORPUS
 
-    @property
-    def corpus(self) -> str: ...
-
-
-def corpus_of(spec: dict, data_config: Callable[..., DataSection] | None = None) -> Path:
-    """The corpus folder the config's "data" section names (the data builder's default when it names none);
-    data_config: that section's class (None: the skinning model's DataConfig)."""
-    from simcore.training.skin_dataset import DataConfig
-
-    section: Callable[..., DataSection] = DataConfig if data_config is None else data_config
-    return Path(section(**spec.get("data", {})).corpus)
+    return Path(spec.get("data", {}).get("corpus", CORPUS))
 
 
 def train_section(spec: dict, model_config: Callable[..., object], train_config: Callable[..., T]) -> T:

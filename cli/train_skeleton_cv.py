@@ -8,8 +8,6 @@ and scores each fold's held-out characters with its `learned` method beside `aut
 
 from __future__ import annotations
 
-import json
-from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -17,9 +15,9 @@ import typer
 from rich.console import Console
 
 from cli.eval_skeleton import metric_cells
-from cli.fold_table import render_folds
+from cli.family_cv import OUT_HELP, FoldsOption, FoldWorkersOption, StepsOption, fold_recipe, render_folds, show_and_write
 from cli.progress import count_bar
-from cli.train import SKELETON_CONFIG, ConfigOption, corpus_of, read_config, train_section
+from cli.train import SKELETON_CONFIG, ConfigOption
 
 
 def _cells(mean: dict) -> list[str]:
@@ -39,28 +37,19 @@ def render(result: dict, console: Console) -> None:
 
 def skeleton_cv(
     config: ConfigOption = SKELETON_CONFIG,
-    folds: Annotated[int, typer.Option(min=2, help="groups of corpus train families, each held out once")] = 5,
-    steps: Annotated[int | None, typer.Option(min=1, help="training steps per fold (default: the config's)")] = None,
-    workers: Annotated[int, typer.Option(min=1, help="folds trained at once (processes)")] = 1,
-    out: Annotated[Path, typer.Option(help="folder for the fold models, logs and cv.json")] = Path(".rigforge-train/skeleton_cv"),
+    folds: FoldsOption = 5,
+    steps: StepsOption = None,
+    workers: FoldWorkersOption = 1,
+    out: Annotated[Path, typer.Option(help=OUT_HELP)] = Path(".rigforge-train/skeleton_cv"),
 ) -> None:
     """Cross-validate the skeleton recipe by source family: every train character's skeleton predicted by a model
     that never saw its family, beside `auto`."""
     from simcore.skeleton.learned_model import SkeletonModelConfig
-    from simcore.training.skeleton_dataset import SkeletonDataConfig
     from simcore.training.skeleton_family_cv import family_cv
     from simcore.training.skeleton_train import SkeletonTrainConfig
 
-    spec = read_config(config)
-    train = train_section(spec, SkeletonModelConfig, SkeletonTrainConfig)
-    if steps is not None:
-        train = replace(train, steps=steps)
-    corpus = corpus_of(spec, SkeletonDataConfig)
-    out.mkdir(parents=True, exist_ok=True)
+    spec, train, corpus = fold_recipe(config, SkeletonModelConfig, SkeletonTrainConfig, steps, out)
     with count_bar("training folds") as update:
         result = family_cv(train, Path(spec["cache"]), corpus, folds, out, workers,
                            lambda done, total: update("", done, total))
-    console = Console() if Console().is_terminal else Console(width=150)
-    render(result, console)
-    (out / "cv.json").write_text(json.dumps(result, indent=1))
-    console.print(f"wrote {out / 'cv.json'}")
+    show_and_write(result, out, render)

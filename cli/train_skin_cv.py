@@ -10,8 +10,6 @@ families they never saw, e.g. to check a prior share in minutes.
 
 from __future__ import annotations
 
-import json
-from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -19,9 +17,9 @@ import typer
 from rich.console import Console
 
 from cli.eval_skin import METRIC_HEADS, PRIOR_SHARE_HELP, metric_cells
-from cli.fold_table import render_folds
+from cli.family_cv import OUT_HELP, FoldsOption, FoldWorkersOption, StepsOption, fold_recipe, render_folds, show_and_write
 from cli.progress import count_bar
-from cli.train import DEFAULT_CONFIG, ConfigOption, corpus_of, read_config, train_section
+from cli.train import DEFAULT_CONFIG, ConfigOption
 
 
 def render(result: dict, console: Console) -> None:
@@ -34,10 +32,10 @@ def render(result: dict, console: Console) -> None:
 
 def skin_cv(
     config: ConfigOption = DEFAULT_CONFIG,
-    folds: Annotated[int, typer.Option(min=2, help="groups of corpus train families, each held out once")] = 5,
-    steps: Annotated[int | None, typer.Option(min=1, help="training steps per fold (default: the config's)")] = None,
-    workers: Annotated[int, typer.Option(min=1, help="folds trained at once (processes)")] = 1,
-    out: Annotated[Path, typer.Option(help="folder for the fold models, logs and cv.json")] = Path(".rigforge-train/skin_cv"),
+    folds: FoldsOption = 5,
+    steps: StepsOption = None,
+    workers: FoldWorkersOption = 1,
+    out: Annotated[Path, typer.Option(help=OUT_HELP)] = Path(".rigforge-train/skin_cv"),
     prior_share: Annotated[float | None, typer.Option(min=0.0, max=1.0, help=PRIOR_SHARE_HELP)] = None,
     members: Annotated[Path | None, typer.Option(exists=True, dir_okay=False, help=(
         "score the fold members stored in this ensemble weights file instead of training "
@@ -49,12 +47,7 @@ def skin_cv(
     from simcore.training.skin_family_cv import family_cv, stored_members_cv
     from simcore.training.skin_train import TrainConfig
 
-    spec = read_config(config)
-    train = train_section(spec, ModelConfig, TrainConfig)
-    if steps is not None:
-        train = replace(train, steps=steps)
-    corpus = corpus_of(spec)
-    out.mkdir(parents=True, exist_ok=True)
+    spec, train, corpus = fold_recipe(config, ModelConfig, TrainConfig, steps, out)
     if members is not None:
         with count_bar("scoring stored folds") as update:
             result = stored_members_cv(members, corpus, out, lambda done, total: update("", done, total), prior_share)
@@ -62,7 +55,4 @@ def skin_cv(
         with count_bar("training folds") as update:
             result = family_cv(train, Path(spec["cache"]), corpus, folds, out, workers,
                                lambda done, total: update("", done, total), prior_share)
-    console = Console() if Console().is_terminal else Console(width=150)
-    render(result, console)
-    (out / "cv.json").write_text(json.dumps(result, indent=1))
-    console.print(f"wrote {out / 'cv.json'}")
+    show_and_write(result, out, render)

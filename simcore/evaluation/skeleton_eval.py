@@ -17,7 +17,7 @@ among (humanoid, geometric): the same skeletons those methods give as job option
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -126,11 +126,14 @@ class SkeletonEvaluation:
         }
 
 
-def resolve_methods(method: str) -> list[str]:
-    """The methods a `--method` value stands for ("all" = the voxel baseline, auto with its candidates, learned)."""
-    if method not in METHODS:
-        raise InvalidInput(f"unknown method {method!r}; use one of {', '.join(METHODS)}", code="invalid_option", field="method")
-    return ["voxel", "auto", "learned"] if method == "all" else [method]
+def resolve_methods(method: str | Sequence[str]) -> list[str]:
+    """The methods a `--method` value stands for ("all" = the voxel baseline, auto with its candidates, learned), or
+    a list of them as they are."""
+    listed = [method] if isinstance(method, str) else list(method)
+    for m in listed:
+        if m not in METHODS or (m == "all" and len(listed) > 1):
+            raise InvalidInput(f"unknown method {m!r}; use one of {', '.join(METHODS)}", code="invalid_option", field="method")
+    return ["voxel", "auto", "learned"] if listed == ["all"] else listed
 
 
 @dataclass
@@ -229,11 +232,12 @@ def evaluate_asset(name: str, category: str, case: EvalCase, methods: list[str],
     return rows
 
 
-def evaluate_directory(directory: Path, method: str = "all", *, max_joints: int = 64, split: str | None = None,
+def evaluate_directory(directory: Path, method: str | Sequence[str] = "all", *, max_joints: int = 64, split: str | None = None,
                        on_asset: Callable[[str], None] | None = None,
                        geometric_params: GeometricParams | None = None, learned_model: Path | None = None,
                        names: Collection[str] | None = None) -> SkeletonEvaluation:
-    """Evaluate every rigged .glb/.gltf in `directory` with `method` ("all", "voxel", "auto", ...); with `split`,
+    """Evaluate every rigged .glb/.gltf in `directory` with `method` ("all", "voxel", "auto", ..., or a list of
+    them, each file read once for all); with `split`,
     only the files `directory`/MANIFEST.tsv lists for that split (the corpus layout); with `names`, only those
     file stems; `learned_model`: the learned method's weights to score instead of the shipped file."""
     methods = resolve_methods(method)

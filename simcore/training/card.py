@@ -27,9 +27,11 @@ def creatures_lines(data_config: dict) -> list[str]:
     """A data line for the procedural creatures when the data section asks for them, else none."""
     if not data_config.get("creatures"):
         return []
-    return [f"- {data_config['creatures']} procedural creatures (simcore/training/creature_bodies.py: quadrupeds, insects, "
-            "spiders, birds, snakes, fish, dragons and long-tailed bipeds, one surface meshed around tapered bone tubes, "
-            f"weights blended between the tubes), {data_config['anny_variants']} variants each"]
+    from simcore.training.creature_bodies import PLANS
+
+    return [f"- {data_config['creatures']} procedural creatures (simcore/training/creature_bodies.py, plans "
+            f"{', '.join(PLANS)} in turn: one surface meshed around tapered bone tubes, weights blended between the "
+            f"tubes), {data_config['anny_variants']} variants each"]
 
 
 def hardware_line(summary: dict) -> str:

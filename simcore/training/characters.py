@@ -23,6 +23,8 @@ from simcore.training.creature_bodies import creature_character, creature_name
 from simcore.training.sample_cache import Job
 from simcore.training.skin_samples import Character
 
+CORPUS = "../shared/corpus"  # the training corpus, beside the repository (both data sections' default)
+
 Make = Callable[[Character, np.random.Generator], Iterable[Mapping[str, np.ndarray]]]
 
 

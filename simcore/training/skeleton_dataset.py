@@ -30,7 +30,7 @@ from simcore.skeleton.shape_points import shape_points
 from simcore.skeleton.tokenizer import SkeletonTokenizer
 from simcore.skeleton.types import Skeleton
 from simcore.training import creature_bodies
-from simcore.training.characters import Make, character_jobs
+from simcore.training.characters import CORPUS, Make, character_jobs
 from simcore.training.sample_cache import fill_cache
 from simcore.training.skin_samples import Character, normalised, variants
 
@@ -41,7 +41,7 @@ GAME_ENGINE_PREFIX = "anny_game_engine"  # anny_bodies names each body after its
 class SkeletonDataConfig:
     """What `rigforge train skeleton-data` builds (the JSON config's "data" section)."""
 
-    corpus: str = "../shared/corpus"
+    corpus: str = CORPUS
     variants: int = 8  # augmented copies of each training character
     anny_bodies: int = 64
     anny_variants: int = 3

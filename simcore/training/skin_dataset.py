@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from simcore.training.anny_bodies import check_rigs
-from simcore.training.characters import Make, character_jobs
+from simcore.training.characters import CORPUS, Make, character_jobs
 from simcore.training.sample_cache import fill_cache
 from simcore.training.skin_samples import Character, make_sample, normalised, variants
 
@@ -24,7 +24,7 @@ from simcore.training.skin_samples import Character, make_sample, normalised, va
 class DataConfig:
     """What `rigforge train data` builds (the JSON config's "data" section)."""
 
-    corpus: str = "../shared/corpus"
+    corpus: str = CORPUS
     variants: int = 6  # augmented copies of each training character
     anny_bodies: int = 48
     anny_variants: int = 2

@@ -64,6 +64,10 @@ def test_methods_and_manifest_parsing(dev_assets, tmp_path) -> None:
     with pytest.raises(InvalidInput) as err:
         resolve_methods("magic")
     assert err.value.field == "method"
+    assert resolve_methods(("learned", "auto")) == ["learned", "auto"]  # a list runs as it is, each file read once
+    for bad in (["auto", "magic"], ["all", "auto"]):
+        with pytest.raises(InvalidInput):
+            resolve_methods(bad)
     assert read_categories(dev_assets)["fox"] == "quadruped"
     assert read_categories(tmp_path) == {}
 

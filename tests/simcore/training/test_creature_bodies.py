@@ -8,6 +8,7 @@ import trimesh
 
 from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, solid_voxels
 from simcore.skeleton.tokenizer import SkeletonTokenizer
+from simcore.training.card import creatures_lines
 from simcore.training.creature_bodies import PLANS, creature_character
 from simcore.training.skeleton_dataset import make_skeleton_sample, target_skeleton
 
@@ -52,3 +53,10 @@ def test_a_creature_tokenizes_into_a_training_sample() -> None:
     assert len(sample.joints) == target_skeleton(c).num_joints and sample.points.shape == (512, 6)
     assert sample.category == "other"
     assert SkeletonTokenizer.read_class(sample.tokens) == "none"  # their own class, apart from the artists' rigs
+
+
+def test_model_cards_list_the_creatures_only_when_the_data_has_them() -> None:
+    assert creatures_lines({"creatures": 0, "anny_variants": 3}) == []
+    (line,) = creatures_lines({"creatures": 240, "anny_variants": 3})
+    assert line.startswith("- 240 procedural creatures") and "3 variants each" in line
+    assert all(plan in line for plan in PLANS)
