@@ -23,7 +23,7 @@ from simcore.geometry.voxel_paths import VoxelPaths
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
 from simcore.geometry.weld import weld_vertices
 from simcore.skeleton.types import Skeleton
-from simcore.skinning.bones import joint_distances, joint_segments
+from simcore.skinning.bones import JointSegments, joint_distances, joint_segments
 from simcore.skinning.postprocess import normalize_rows
 
 ALPHA = 0.5  # Dionne & de Lasa falloff mix between 1/d and 1/d² (the paper's and UniRig's value)
@@ -43,11 +43,10 @@ _CORNERS = np.array(list(itertools.product((0, 1), repeat=3)), dtype=np.int64)
 
 
 def _bone_sources(
-    grid: VoxelGrid, ijk: np.ndarray, ids: np.ndarray, skeleton: Skeleton, leaf_extension: float
+    grid: VoxelGrid, ijk: np.ndarray, ids: np.ndarray, skeleton: Skeleton, seg: JointSegments
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(joint, voxel id, link length) for the voxels each joint's segments cross (nearest voxel when outside),
     sorted by joint then voxel; the length is the voxel centre's distance to the joint's nearest segment."""
-    seg = joint_segments(skeleton, leaf_extension)
     n, joints = len(ijk), skeleton.num_joints
     points, segment = segment_points(seg.heads, seg.tails, 0.5 * grid.pitch)
     owner = seg.owner[segment]
@@ -82,6 +81,7 @@ def geodesic_distances(
     *,
     resolution: int = RESOLUTION,
     leaf_extension: float = LEAF_EXTENSION,
+    leaf_parts: bool = True,
     cutoff: float | None = None,
     progress: Callable[[float], None] = lambda fraction: None,
 ) -> np.ndarray:
@@ -92,6 +92,8 @@ def geodesic_distances(
     cutoff: when set, a joint's search stops at voxels where it is over `cutoff` × as far as their nearest
     joint (+ SLACK_VOXELS), and such joints read as infinity (for weights, where such joints get nothing
     anyway); None = complete matrix.
+    leaf_parts: a leaf joint's segment points into the mesh part nearest to it (bones.leaf_tails); False: it
+    continues the parent bone (what the learned model's inputs were trained with).
     progress: called with the fraction done at each checkpoint (it may raise to stop the computation).
     """
     v = np.asarray(vertices, dtype=np.float64)
@@ -106,7 +108,8 @@ def geodesic_distances(
     ijk, ids = paths.ijk, paths.ids
     progress(0.3)
     j = skeleton.num_joints
-    sj, sv, sd = _bone_sources(grid, ijk, ids, skeleton, leaf_extension)
+    segments = joint_segments(skeleton, leaf_extension, wv if leaf_parts else None)
+    sj, sv, sd = _bone_sources(grid, ijk, ids, skeleton, segments)
     bound = None
     if cutoff is not None:  # one pass from all joints at once: each voxel's nearest-joint distance bounds the rest
         nearest = paths.distances(np.zeros_like(sj), sv, sd, 1)[:, 0]
@@ -130,7 +133,7 @@ def geodesic_distances(
     dist = dist.astype(np.float64)
     lost = ~np.isfinite(dist).any(axis=1)
     if lost.any():
-        dist[lost] = joint_distances(wv[lost], joint_segments(skeleton, leaf_extension), j)
+        dist[lost] = joint_distances(wv[lost], segments, j)
     return dist[welded.index]
 
 

@@ -152,7 +152,8 @@ def skin_inputs(
     """The model's inputs for a mesh (V, 3) / (F, 3) and a skeleton in the same space."""
     v = np.asarray(vertices, dtype=np.float64)
     centre, side = unit_cube_frame(v)
-    geo = geodesic_distances(v, faces, skeleton, progress=lambda f: progress(0.8 * f)) / side
+    # The leaves continue their parent bones here, as the shipped model was trained (README, Skinning).
+    geo = geodesic_distances(v, faces, skeleton, leaf_parts=False, progress=lambda f: progress(0.8 * f)) / side
     geo = np.where(np.isfinite(geo), geo, FAR)
     segments = joint_segments(skeleton, LEAF_EXTENSION)
     dist, t = closest_on_segments(v / side, segments.heads / side, segments.tails / side)  # (V, S)
