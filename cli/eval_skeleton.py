@@ -1,4 +1,4 @@
-"""`rigforge eval skeleton DIR [--method M] [--ablate] [--json FILE]`: skeleton metrics over a directory of rigs."""
+"""`rigforge eval skeleton DIR [--method M ...] [--ablate] [--json FILE]`: skeleton metrics over a directory of rigs."""
 
 from __future__ import annotations
 
@@ -75,7 +75,8 @@ def render_ablation(report: dict, console: Console) -> None:
 
 def eval_skeleton(
     dir: Annotated[Path, typer.Argument(help="directory of rigged .glb/.gltf files (MANIFEST.tsv optional)")],
-    method: Annotated[str, typer.Option("--method", help="all | voxel | auto | geometric | humanoid | learned")] = "all",
+    method: Annotated[list[str] | None, typer.Option("--method", help="all | voxel | auto | geometric | humanoid | learned; "
+                                                                       "repeat it for several (default: all)")] = None,
     json_path: Annotated[Path | None, typer.Option("--json", help="write the report as JSON here")] = None,
     max_joints: Annotated[int, typer.Option("--max-joints", help="joint cap for the predicted methods")] = 64,
     split: Annotated[str | None, typer.Option(help="only the files DIR/MANIFEST.tsv lists for this split (train, val)")] = None,
@@ -101,7 +102,7 @@ def eval_skeleton(
             if ablate:
                 report = ablate_directory(dir, max_joints=max_joints, split=split, on_asset=on_asset).to_dict()
             else:
-                report = evaluate_directory(dir, method, max_joints=max_joints, split=split, on_asset=on_asset,
+                report = evaluate_directory(dir, method or "all", max_joints=max_joints, split=split, on_asset=on_asset,
                                             learned_model=model).to_dict()
     except SimcoreError as exc:
         console.print(f"[red]{exc.code}[/red]: {exc}")

@@ -1,4 +1,4 @@
-"""`rigforge eval skin DIR [--method M] [--peers DIR] [--json FILE]`: skin-only evaluation on the assets' own skeletons.
+"""`rigforge eval skin DIR [--method M ...] [--peers DIR] [--json FILE]`: skin-only evaluation on the assets' own skeletons.
 
 Registered in cli/main.py as `eval_app.command("skin")(eval_skin.eval_skin)`. Peer weights (Blender's) come
 from `bench/peers/blender_weights.py`, which writes bench/results/peers/blender/<asset>.npz; that folder's
@@ -86,7 +86,8 @@ def render(report: SkinEvaluation, console: Console) -> None:
 
 def eval_skin(
     directory: Annotated[Path, typer.Argument(exists=True, file_okay=False, help="folder of rigged .glb/.gltf (MANIFEST.tsv optional)")],
-    method: Annotated[str, typer.Option(help="auto, learned, geodesic, heat, or all (every method but auto)")] = "auto",
+    method: Annotated[list[str] | None, typer.Option(help="auto, learned, geodesic, heat, or all (every method but auto); "
+                                                           "repeat it for several (default: auto)")] = None,
     peers: Annotated[Path, typer.Option(help="folder of peer weights: PEERS/<peer>/<asset>.npz")] = DEFAULT_PEERS,
     json_path: Annotated[Path | None, typer.Option("--json", help="write the JSON report here")] = None,
     pipeline: Annotated[bool, typer.Option(help="add full-pipeline rows: our skeleton + our weights vs the artist's rig")] = False,
@@ -97,10 +98,10 @@ def eval_skin(
     prior_share: Annotated[float | None, typer.Option(min=0.0, max=1.0, help=PRIOR_SHARE_HELP)] = None,
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
-    from simcore.evaluation.skin_eval import OUR_METHODS, evaluate_skinning
+    from simcore.evaluation.skin_eval import evaluate_skinning, skin_methods
     from simcore.skinning.learned import SHIPPED
 
-    methods = [m for m in OUR_METHODS if m != "auto"] if method == "all" else [method]
+    methods = skin_methods(method or ["auto"])
     console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:
         report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split,

@@ -18,7 +18,7 @@ onto the matched artist joints (W_ours · C, C one-hot J_ours × J_gt), so every
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -227,6 +227,16 @@ def _peer_row(name: str, category: str, peer: str, found: PeerWeights, asset: Ri
     what = {"ok": None, "partial": "partial", "failed": "failed (no solution)"}[found.status]
     note = what and f"{what}: {found.unweighted_share:.1%} of vertices unweighted"
     return SkinRow(name, category, peer, metrics, note=note, status=found.status, unweighted_share=found.unweighted_share)
+
+
+def skin_methods(listed: Sequence[str]) -> list[str]:
+    """Our methods a list of `--method` values stands for: "all" alone is every method but auto (which runs one of
+    them); InvalidInput (field `method`) for an unknown name or "all" beside others."""
+    for m in listed:
+        if m not in (*OUR_METHODS, "all") or (m == "all" and len(listed) > 1):
+            raise InvalidInput(f"unknown skinning method {m!r}; use {', '.join(OUR_METHODS)} or all (alone)",
+                               code="invalid_option", field="method")
+    return [m for m in OUR_METHODS if m != "auto"] if list(listed) == ["all"] else list(dict.fromkeys(listed))
 
 
 def evaluate_skinning(

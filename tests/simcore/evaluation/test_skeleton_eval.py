@@ -52,10 +52,11 @@ def test_cli_writes_json(small_dir, tmp_path) -> None:
     app = typer.Typer()
     app.command()(eval_skeleton)
     out = tmp_path / "report.json"
-    result = CliRunner().invoke(app, [str(small_dir), "--method", "voxel", "--json", str(out)])
+    result = CliRunner().invoke(app, [str(small_dir), "--method", "voxel", "--method", "geometric", "--json", str(out)])
     assert result.exit_code == 0, result.output
     assert "MEAN" in result.output and "skipped meshseq_flamingo" in result.output
     data = json.loads(out.read_text())
+    assert [a["method"] for a in data["assets"]] == ["voxel", "geometric"] * 2  # the option repeats
     assert {"name", "category", "method", "j2j", "j2b", "b2b", "joints_pred", "joints_gt", "inside", "seconds"} <= set(data["assets"][0])
 
 

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
-from simcore.evaluation.skin_eval import evaluate_skinning, rigged_assets
+from simcore.errors import InvalidInput
+from simcore.evaluation.skin_eval import evaluate_skinning, rigged_assets, skin_methods
 
 
 def test_eval_rows_clip_column_and_a_perfect_peer(dev_assets: Path, tmp_path: Path) -> None:
@@ -43,3 +46,29 @@ def test_joint_correspondence_matches_bones_not_names() -> None:
     weights = sp.csr_matrix(np.eye(3))
     np.testing.assert_array_equal(joint_correspondence(ours, gt, weights), [0, 0, 1, 2])
     np.testing.assert_array_equal(joint_correspondence(gt, gt, weights), [0, 1, 2])
+
+
+def test_method_values_expand_all_keep_order_and_reject_unknown_names() -> None:
+    assert skin_methods(["all"]) == ["learned", "geodesic", "heat"]
+    assert skin_methods(["heat", "geodesic", "heat"]) == ["heat", "geodesic"]
+    for bad in (["nonsense"], ["all", "heat"]):
+        with pytest.raises(InvalidInput) as caught:
+            skin_methods(bad)
+        assert caught.value.field == "method"
+
+
+def test_the_command_scores_every_method_it_is_given(dev_assets: Path, tmp_path: Path) -> None:
+    """`--method geodesic --method heat`: rows for both (the option repeats; it once kept only the last)."""
+    from typer.testing import CliRunner
+
+    from cli.main import app
+
+    assets = tmp_path / "assets"
+    assets.mkdir()
+    (assets / "rigged_figure.glb").symlink_to(dev_assets / "rigged_figure.glb")
+    out = tmp_path / "report.json"
+    done = CliRunner().invoke(app, ["eval", "skin", str(assets), "--method", "geodesic", "--method", "heat",
+                                    "--json", str(out)])
+    assert done.exit_code == 0, done.output
+    report = json.loads(out.read_text())
+    assert [r["method"] for r in report["assets"]] == ["geodesic", "heat"]
