@@ -98,13 +98,12 @@ def eval_skin(
     prior_share: Annotated[float | None, typer.Option(min=0.0, max=1.0, help=PRIOR_SHARE_HELP)] = None,
 ) -> None:
     """Re-skin every rigged asset on its own skeleton and compare with the artist's weights (and peers)."""
-    from simcore.evaluation.skin_eval import evaluate_skinning, skin_methods
+    from simcore.evaluation.skin_eval import evaluate_skinning
     from simcore.skinning.learned import SHIPPED
 
-    methods = skin_methods(method or ["auto"])
     console = Console() if Console().is_terminal else Console(width=150)  # files and pipes get the full table
     with console.status("skinning…") as status:
-        report = evaluate_skinning(directory, methods, peers=peers, pipeline=pipeline, split=split,
+        report = evaluate_skinning(directory, method or ["auto"], peers=peers, pipeline=pipeline, split=split,
                                    learned=SHIPPED.overridden(model, prior_share),
                                    on_asset=lambda n: status.update(f"skinning {n}"))
     render(report, console)

@@ -26,6 +26,7 @@ import numpy as np
 
 from simcore.errors import InvalidInput
 from simcore.evaluation.assets import asset_files, problem, read_categories
+from simcore.evaluation.methods import listed_methods
 from simcore.evaluation.voxel_baseline import voxel_skeleton_graph
 from simcore.geometry.voxelize import JOINT_TEST_RESOLUTION, VoxelGrid, solid_voxels
 from simcore.io.gltf_rig import used_joints
@@ -127,13 +128,8 @@ class SkeletonEvaluation:
 
 
 def resolve_methods(method: str | Sequence[str]) -> list[str]:
-    """The methods a `--method` value stands for ("all" = the voxel baseline, auto with its candidates, learned), or
-    a list of them as they are."""
-    listed = [method] if isinstance(method, str) else list(method)
-    for m in listed:
-        if m not in METHODS or (m == "all" and len(listed) > 1):
-            raise InvalidInput(f"unknown method {m!r}; use one of {', '.join(METHODS)}", code="invalid_option", field="method")
-    return ["voxel", "auto", "learned"] if listed == ["all"] else listed
+    """The methods `--method` values stand for ("all" = the voxel baseline, auto with its candidates, learned)."""
+    return listed_methods(method, METHODS[1:], ("voxel", "auto", "learned"), "method")
 
 
 @dataclass

@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from simcore.errors import InvalidInput, SimcoreError
+from simcore.errors import SimcoreError
 from simcore.evaluation.assets import rigged_assets
+from simcore.evaluation.methods import listed_methods
 from simcore.io.gltf_document import GltfDocument
 from simcore.io.gltf_rig import RiggedAsset, root_holds_weight, weightless_joints
 from simcore.metrics.skinning import deformation_error, support_precision_recall, unit_cube_frame, weight_l1
@@ -229,19 +230,9 @@ def _peer_row(name: str, category: str, peer: str, found: PeerWeights, asset: Ri
     return SkinRow(name, category, peer, metrics, note=note, status=found.status, unweighted_share=found.unweighted_share)
 
 
-def skin_methods(listed: Sequence[str]) -> list[str]:
-    """Our methods a list of `--method` values stands for: "all" alone is every method but auto (which runs one of
-    them); InvalidInput (field `method`) for an unknown name or "all" beside others."""
-    for m in listed:
-        if m not in (*OUR_METHODS, "all") or (m == "all" and len(listed) > 1):
-            raise InvalidInput(f"unknown skinning method {m!r}; use {', '.join(OUR_METHODS)} or all (alone)",
-                               code="invalid_option", field="method")
-    return [m for m in OUR_METHODS if m != "auto"] if list(listed) == ["all"] else list(dict.fromkeys(listed))
-
-
 def evaluate_skinning(
     directory: Path,
-    methods: list[str],
+    methods: Sequence[str],
     *,
     peers: Path | None = None,
     pipeline: bool = False,
@@ -250,13 +241,12 @@ def evaluate_skinning(
     learned: LearnedSkinning = SHIPPED,
     on_asset: Callable[[str], None] | None = None,
 ) -> SkinEvaluation:
-    """Skin every rigged asset in `directory` with each of our `methods`; score peers found under `peers`;
+    """Skin every rigged asset in `directory` with each of our `methods` (in order, each once; "all" alone: every
+    method but auto, which runs one of them); score peers found under `peers`;
     with `pipeline`, add full-pipeline rows (our skeleton and weights vs the artist's rig); with `split`, only the
     files `directory`/MANIFEST.tsv lists for that split (the corpus layout); with `names`, only those assets;
     `learned`: the learned method's (and `auto`'s) model file and prior share in place of the shipped ones."""
-    for m in methods:
-        if m not in OUR_METHODS:
-            raise InvalidInput(f"unknown skinning method {m!r}; use {', '.join(OUR_METHODS)} or all", code="invalid_option", field="method")
+    methods = listed_methods(methods, OUR_METHODS, [m for m in OUR_METHODS if m != "auto"], "skinning method")
     report = SkinEvaluation()
     for name, category, doc, asset in rigged_assets(directory, report.skipped, split=split, names=names):
         if on_asset is not None:

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from simcore.errors import InvalidInput
-from simcore.evaluation.skin_eval import evaluate_skinning, rigged_assets, skin_methods
+from simcore.evaluation.methods import listed_methods
+from simcore.evaluation.skin_eval import OUR_METHODS, evaluate_skinning, rigged_assets
 
 
 def test_eval_rows_clip_column_and_a_perfect_peer(dev_assets: Path, tmp_path: Path) -> None:
@@ -48,13 +49,16 @@ def test_joint_correspondence_matches_bones_not_names() -> None:
     np.testing.assert_array_equal(joint_correspondence(gt, gt, weights), [0, 1, 2])
 
 
-def test_method_values_expand_all_keep_order_and_reject_unknown_names() -> None:
-    assert skin_methods(["all"]) == ["learned", "geodesic", "heat"]
-    assert skin_methods(["heat", "geodesic", "heat"]) == ["heat", "geodesic"]
+def test_method_values_expand_all_keep_order_and_reject_unknown_names(tmp_path: Path) -> None:
+    """An empty folder: the methods are checked before any asset is read."""
+    assert evaluate_skinning(tmp_path, ["all"]).methods() == []
     for bad in (["nonsense"], ["all", "heat"]):
         with pytest.raises(InvalidInput) as caught:
-            skin_methods(bad)
+            evaluate_skinning(tmp_path, bad)
         assert caught.value.field == "method"
+    assert listed_methods(["all"], OUR_METHODS, ["learned", "geodesic", "heat"], "skinning method") == \
+        ["learned", "geodesic", "heat"]
+    assert listed_methods(["heat", "geodesic", "heat"], OUR_METHODS, [], "skinning method") == ["heat", "geodesic"]
 
 
 def test_the_command_scores_every_method_it_is_given(dev_assets: Path, tmp_path: Path) -> None:
