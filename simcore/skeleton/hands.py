@@ -4,10 +4,11 @@ A hand is cropped around the fitted wrist (vertices of faces inside a sphere ove
 resolution where fingers separate, thinned and pruned. Tips beyond the wrist are finger candidates; the
 thumb is the one that branches off closest to the wrist, the other four are ordered index → pinky by how far
 forward they are (palms down or in, the index is the front finger). Joints 1, 2, 3 sit along each finger's
-branch (knuckle, then fractions of the knuckle → tip length measured on Mixamo hands). Exactly five tips must
-stand out (a sixth long one means surface noise or a mitten's folds). When fingers touch so closely that
-they share voxels, `finger_template` checks the mesh's cross-sections for separate finger shells and lays the
-joints out from the Mixamo hand template instead (report: "fallback", "template").
+branch (knuckle, then fractions of the knuckle → tip length measured on Mixamo hands). Five tips, or four (a
+cartoon hand: a thumb and three fingers, named `mixamo.FOUR_FINGERS`), must stand out from any further tip (a
+long one beyond them means surface noise or a mitten's folds); both hands must show the same count. When fingers
+touch so closely that they share voxels, `finger_template` checks the mesh's cross-sections for separate finger
+shells and lays the joints out from the Mixamo hand template instead (report: "fallback", "template").
 """
 
 from __future__ import annotations
@@ -18,15 +19,14 @@ import numpy as np
 
 from simcore.arrays import unique_ints
 from simcore.geometry.voxelize import VoxelGrid, solid_voxels
-from simcore.skeleton.finger_template import template_fingers
+from simcore.skeleton.finger_template import HAND_KINDS, template_fingers
 from simcore.skeleton.geometric import rank_bodies
 from simcore.skeleton.graph_simplify import path_length, point_at_fraction, prune_spurs, rooted_parents
 from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import medial_forest
-from simcore.skeleton.mixamo import FINGERS
 
 HAND_RESOLUTION = 96  # 64 merges fingers that are only a few millimetres apart; 128 costs 3× the time
-STAND_OUT = 0.6  # a sixth finger-like tip longer than this × the fifth means the "fingers" are surface noise
+STAND_OUT = 0.6  # a further finger-like tip longer than this × the last finger means the "fingers" are surface noise
 MIN_FINGER_RATIO = 0.35  # shortest / longest free finger branch (the thumb's is the shortest on real hands)
 PHALANX = {"Thumb": (0.15, 0.5, 0.8), "Other": (0.0, 0.42, 0.72)}  # fraction of knuckle-branch → tip arc
 
@@ -47,9 +47,10 @@ def _hand_crop(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray,
     return vertices[used], remap[faces[keep]]
 
 
-def _one_hand(grid: VoxelGrid, sub_v: np.ndarray, wrist: np.ndarray, elbow: np.ndarray,
-              forward: np.ndarray) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
-    """Fingers from the medial tree of the hand crop's solid `grid` (crop vertices sub_v (V, 3)), or None."""
+def _one_hand(grid: VoxelGrid, sub_v: np.ndarray, wrist: np.ndarray, elbow: np.ndarray, forward: np.ndarray,
+              kinds: tuple[tuple[str, ...], ...]) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
+    """Fingers from the medial tree of the hand crop's solid `grid` (crop vertices sub_v (V, 3)), the first of
+    the finger sets `kinds` that stands out, or None."""
     forearm = float(np.linalg.norm(wrist - elbow))
     d = (wrist - elbow) / max(forearm, 1e-12)
     forest = medial_forest(grid)
@@ -65,7 +66,7 @@ def _one_hand(grid: VoxelGrid, sub_v: np.ndarray, wrist: np.ndarray, elbow: np.n
     root = min(leaves, key=lambda n: (along[n], n))  # the cut forearm end
     parent = rooted_parents(forest.adjacency, root)
     tips = [n for n in leaves if n != root and along[n] > 0.15 * forearm]
-    if len(tips) < 5:
+    if len(tips) < min(len(f) for f in kinds):
         return None, {"reason": f"fingers not separable ({len(tips)} finger tips found)", "tips": len(tips)}
     chains = {}
     for tip in tips:
@@ -74,54 +75,74 @@ def _one_hand(grid: VoxelGrid, sub_v: np.ndarray, wrist: np.ndarray, elbow: np.n
             path.append(parent[path[-1]])
         chains[tip] = path  # tip → its branch point
     tips = sorted(tips, key=lambda n: (-path_length(pos, chains[n]), n))
-    if len(tips) > 5 and path_length(pos, chains[tips[5]]) > STAND_OUT * path_length(pos, chains[tips[4]]):
-        return None, {"reason": "no five finger branches stand out from the other tips (mitten or noisy hand)",
-                      "tips": len(tips)}
-    tips = tips[:5]
     lengths = [path_length(pos, chains[n]) for n in tips]
+    names = next((f for f in kinds if len(tips) >= len(f) and (
+        len(tips) == len(f) or lengths[len(f)] <= STAND_OUT * lengths[len(f) - 1])), None)
+    if names is None:
+        return None, {"reason": f"no {' or '.join(str(len(f)) for f in kinds)} finger branches stand out from the "
+                                "other tips (mitten or noisy hand)", "tips": len(tips)}
+    tips, lengths = tips[:len(names)], lengths[:len(names)]
     if min(lengths) < MIN_FINGER_RATIO * max(lengths) or max(lengths) < 0.2 * forearm:
         return None, {"reason": "finger-like tips are too unequal or too short to be fingers", "tips": len(tips)}
     thumb = min(tips, key=lambda n: (along[chains[n][-1]], n))
     others = sorted((n for n in tips if n != thumb), key=lambda n: (-float(pos[n] @ forward), n))
     out: dict[str, np.ndarray] = {}
-    for finger, tip in zip(FINGERS, [thumb] + others):
+    for finger, tip in zip(names, [thumb] + others):
         pts = pos[chains[tip][::-1]]  # branch point → tip
         for k, frac in enumerate(PHALANX["Thumb" if finger == "Thumb" else "Other"], start=1):
             out[f"{finger}{k}"] = point_at_fraction(pts, frac)
-    return out, {"tips": len(leaves) - 1}
+    return out, {"tips": len(leaves) - 1, "fingers": len(names)}
+
+
+def _fit_hand(v: np.ndarray, f: np.ndarray, wrist: np.ndarray, elbow: np.ndarray, forward: np.ndarray, side: str,
+              kinds: tuple[tuple[str, ...], ...]) -> tuple[dict[str, np.ndarray] | None, dict[str, Any], bool]:
+    """One hand's fingers (bare names without the side → (3,)) from its medial tree, else from the template;
+    with the report and whether the template placed them."""
+    crop = _hand_crop(v, f, wrist, elbow)
+    if crop is None:
+        return None, {"reason": "too few triangles around the hand"}, False
+    grid = solid_voxels(crop[0], crop[1], resolution=HAND_RESOLUTION)
+    fingers, info = _one_hand(grid, crop[0], wrist, elbow, forward, kinds)
+    if fingers is not None:
+        return fingers, info, False
+    # touching fingers: the mesh's sections can still show them
+    fingers, template_info = template_fingers(crop[0], crop[1], wrist, elbow, forward, side, kinds)
+    info = {**info, "fallback": template_info}
+    if fingers is None:
+        return None, info, False
+    names = list(fingers)  # the template knows proportions, not this hand's surface
+    return dict(zip(names, snap_inside(grid, np.array([fingers[n] for n in names])))), info, True
 
 
 def fit_fingers(vertices: np.ndarray, faces: np.ndarray, body: dict[str, np.ndarray], up: np.ndarray,
                 forward: np.ndarray, left: np.ndarray) -> tuple[dict[str, np.ndarray] | None, dict[str, Any]]:
-    """The 30 finger joints (bare Mixamo names → (3,) positions) when both hands show five fingers, else None.
+    """The finger joints (bare Mixamo names → (3,) positions) when both hands show fingers, else None: 30 joints,
+    or 24 when the hands have four fingers each.
 
+    When one hand reads as five-fingered and the other as four, the five-fingered one is read again as
+    four-fingered: a held prop or a fold adds a loop or a tip more often than touching fingers hide one.
     body: bare Mixamo body joint name → (3,) position (needs LeftHand/LeftForeArm and the Right pair).
     """
-    out: dict[str, np.ndarray] = {}
-    report: dict[str, Any] = {}
     v, f = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
-    template_used = False
+    report: dict[str, Any] = {}
+    hands: dict[str, tuple[dict[str, np.ndarray], bool]] = {}
     for side in ("Left", "Right"):
-        wrist, elbow = body[f"{side}Hand"], body[f"{side}ForeArm"]
-        crop = _hand_crop(v, f, wrist, elbow)
-        if crop is None:
-            report[side.lower()] = {"reason": "too few triangles around the hand"}
-            report["separable"] = False
-            return None, report
-        grid = solid_voxels(crop[0], crop[1], resolution=HAND_RESOLUTION)
-        fingers, info = _one_hand(grid, crop[0], wrist, elbow, forward)
-        if fingers is None:  # touching fingers: the mesh's sections can still show them
-            fingers, template_info = template_fingers(crop[0], crop[1], wrist, elbow, forward, side)
-            info = {**info, "fallback": template_info}
-            if fingers is not None:  # the template knows proportions, not this hand's surface
-                names = list(fingers)
-                fingers = dict(zip(names, snap_inside(grid, np.array([fingers[n] for n in names]))))
-                template_used = True
-        report[side.lower()] = info
+        fingers, report[side.lower()], template_used = _fit_hand(
+            v, f, body[f"{side}Hand"], body[f"{side}ForeArm"], forward, side, HAND_KINDS)
         if fingers is None:
             report["separable"] = False
             return None, report
-        out.update({f"{side}Hand{k}": p for k, p in fingers.items()})
+        hands[side] = fingers, template_used
+    more, fewer = sorted(hands, key=lambda s: (-len(hands[s][0]), s))
+    if len(hands[more][0]) != len(hands[fewer][0]):
+        kind = next(k for k in HAND_KINDS if 3 * len(k) == len(hands[fewer][0]))
+        fingers, info, template_used = _fit_hand(v, f, body[f"{more}Hand"], body[f"{more}ForeArm"], forward, more,
+                                                 (kind,))
+        report[more.lower()] = {**report[more.lower()], "read_again": info}
+        if fingers is None:
+            report.update(separable=False, reason="the hands show different finger counts")
+            return None, report
+        hands[more] = fingers, template_used
     report["separable"] = True
-    report["template"] = template_used
-    return out, report
+    report["template"] = any(t for _, t in hands.values())
+    return {f"{side}Hand{k}": p for side, (fingers, _) in hands.items() for k, p in fingers.items()}, report

@@ -1,4 +1,5 @@
-"""Mixamo humanoid fit: detect an upright biped on the medial tree and place the 22 body joints (+30 fingers).
+"""Mixamo humanoid fit: detect an upright biped on the medial tree and place the 22 body joints (+30 fingers, or
+24 on four-fingered hands).
 
 Detection works on the largest body's pruned medial tree (see `geometric`), for each candidate up axis:
 head = highest tree tip; feet = the two low tips whose tree paths split highest (the crotch); arms = the two
@@ -425,7 +426,7 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
         fingers, finger_report = fit_fingers(v, faces, joints, biped.up, forward, left)
         report["fingers"] = finger_report
     if fingers is not None:
-        for n in HAND_JOINTS:
+        for n in (n for n in HAND_JOINTS if n in fingers):  # a four-fingered hand has no Ring slots
             names.append(n)
             positions.append(fingers[n])
             kinds.append(JointKind.HAND)

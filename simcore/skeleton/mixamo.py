@@ -20,6 +20,9 @@ BODY_PARENTS: dict[str, str | None] = {
     "RightUpLeg": "Hips", "RightLeg": "RightUpLeg", "RightFoot": "RightLeg", "RightToeBase": "RightFoot",
 }
 FINGERS: tuple[str, ...] = ("Thumb", "Index", "Middle", "Ring", "Pinky")
+# A cartoon four-fingered hand (a thumb and three fingers): the outer finger takes the pinky's slot, as
+# Quaternius's characters name it (GDQuest's mannequin calls it ring), so only the Ring slots stay empty.
+FOUR_FINGERS: tuple[str, ...] = ("Thumb", "Index", "Middle", "Pinky")
 # 30 finger joints: per side, per finger, phalanges 1..3; each chain hangs off that side's Hand.
 HAND_JOINTS: tuple[str, ...] = tuple(
     f"{side}Hand{finger}{k}" for side in ("Left", "Right") for finger in FINGERS for k in (1, 2, 3)

@@ -4,14 +4,21 @@ Candidates come in order of preference (the humanoid template, then the geometri
 whose score is within MARGIN of the best one wins. On corpus `train` the score's small differences picked worse
 skeletons as often as better ones; a clear gap (a candidate with joints outside the body, stacked joints, bones
 across the body or a lopsided tree on a symmetric mesh) is what it reliably sees.
+Finger joints (`JointKind.HAND`) are left out of the score here: a finger's bones are shorter than the solid the
+score reads (`stacked` would count them as joints in one place), and only the humanoid candidate has them, so they
+would weigh a detail against whole methods. (The learned method's best-of-N keeps them: its samples differ in
+their hands too.)
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from simcore.skeleton.candidate_score import CandidateScore, ShapeContext, score_candidate
 from simcore.skeleton.candidates import Candidate
+from simcore.skeleton.types import JointKind, Skeleton
 
 MARGIN = 0.1  # of the quality score: a preferred candidate this close to the best one is kept
 
@@ -35,6 +42,12 @@ class Selection:
         }
 
 
+def without_fingers(skeleton: Skeleton) -> Skeleton:
+    """The skeleton without its finger joints (JointKind.HAND), or itself when it has none."""
+    fingers = np.array([kind == JointKind.HAND for kind in skeleton.kinds], dtype=bool)
+    return skeleton.without(fingers)[0] if fingers.any() and not fingers[0] else skeleton
+
+
 def _best_per_method(candidates: list[Candidate], scores: list[CandidateScore]) -> dict[str, tuple[int, float]]:
     """method → (index, total) of its best-scoring candidate, in the candidates' method order."""
     best: dict[str, tuple[int, float]] = {}
@@ -48,7 +61,7 @@ def select_candidate(candidates: list[Candidate], shape: ShapeContext, margin: f
     """The first of `candidates` (listed in order of preference) whose quality score is within `margin` of the best."""
     if not candidates:
         raise ValueError("no skeleton candidates to select from")
-    scores = [score_candidate(c.skeleton, shape) for c in candidates]
+    scores = [score_candidate(without_fingers(c.skeleton), shape) for c in candidates]
     top = max(s.total for s in scores)
     chosen = next(k for k, s in enumerate(scores) if s.total >= top - margin)
     best = _best_per_method(candidates, scores)

@@ -1,11 +1,13 @@
-"""Finger template fallback: section loops tell fingers from mittens; the 15 joints land on the right fingers."""
+"""Finger template fallback: section loops tell five- and four-fingered hands from mittens; the joints land on the
+right fingers."""
 
 from __future__ import annotations
 
 import numpy as np
 import trimesh
 
-from simcore.skeleton.finger_template import section_loops, template_fingers
+from simcore.skeleton.finger_template import finger_names, section_loops, template_fingers
+from simcore.skeleton.mixamo import FINGERS, FOUR_FINGERS
 from tests.meshes import joined
 
 WRIST, ELBOW, FORWARD = np.array([0.0, 0.0, 0.0]), np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
@@ -16,11 +18,13 @@ def box(lo, hi) -> trimesh.Trimesh:
     return trimesh.creation.box(extents=hi - lo, transform=trimesh.transformations.translation_matrix((lo + hi) / 2))
 
 
-def left_hand(fingers: bool) -> tuple[np.ndarray, np.ndarray]:
-    """A palm (x up to 0.4) and four finger boxes 4 mm apart (x 0.4..0.8, index at +z; fused at voxel size), or a mitten."""
+def left_hand(fingers: bool, count: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """A palm (x up to 0.4) and `count` finger boxes 4 mm apart across z -0.2..0.2 (x 0.4..0.8, index at +z;
+    fused at voxel size), or a mitten."""
     parts = [box([-0.2, -0.05, -0.2], [0.4, 0.05, 0.2])]
     if fingers:
-        parts += [box([0.4, -0.04, z], [0.8, 0.04, z + 0.096]) for z in (-0.2, -0.1, 0.0, 0.1)]
+        width = 0.4 / count
+        parts += [box([0.4, -0.04, z], [0.8, 0.04, z + width - 0.004]) for z in -0.2 + width * np.arange(count)]
     else:
         parts.append(box([0.4, -0.04, -0.2], [0.8, 0.04, 0.2]))
     mesh = joined(parts).subdivide().subdivide()  # real hands have many vertices
@@ -29,9 +33,19 @@ def left_hand(fingers: bool) -> tuple[np.ndarray, np.ndarray]:
 
 def test_section_loops_counts_separate_shells():
     v, f = left_hand(fingers=True)
-    assert section_loops(v, f, np.array([0.6, 0, 0]), np.array([1.0, 0, 0])) == 4
+    loops = section_loops(v, f, np.array([0.6, 0, 0]), np.array([1.0, 0, 0]))
+    assert len(loops) == 4
+    assert np.allclose(sorted(c[2] for c in loops), [-0.152, -0.052, 0.048, 0.148], atol=0.01)  # each finger's centre
     v, f = left_hand(fingers=False)
-    assert section_loops(v, f, np.array([0.6, 0, 0]), np.array([1.0, 0, 0])) == 1
+    assert len(section_loops(v, f, np.array([0.6, 0, 0]), np.array([1.0, 0, 0]))) == 1
+
+
+def test_the_loop_count_two_planes_reach_names_the_fingers():
+    assert finger_names([4, 4, 4, 3, 3]) == FINGERS
+    assert finger_names([3, 3, 2, 2, 1]) == FOUR_FINGERS  # the shorter fingers end before the farther planes
+    assert finger_names([3, 1, 1, 1, 1]) is None  # one plane alone is not evidence
+    assert finger_names([1, 1, 1, 1, 1]) is None
+    assert finger_names([4, 4, 4, 3, 3], (FOUR_FINGERS,)) == FOUR_FINGERS  # read again as four-fingered
 
 
 def test_touching_fingers_get_template_joints_with_the_index_in_front():
@@ -48,3 +62,39 @@ def test_a_mitten_gets_no_fingers():
     v, f = left_hand(fingers=False)
     joints, info = template_fingers(v, f, WRIST, ELBOW, FORWARD, "Left")
     assert joints is None and "mitten" in info["reason"]
+
+
+def test_a_four_fingered_hand_gets_its_three_fingers_where_the_sections_show_them():
+    v, f = left_hand(fingers=True, count=3)
+    joints, info = template_fingers(v, f, WRIST, ELBOW, FORWARD, "Left")
+    assert joints is not None and info["fingers"] == 4
+    assert sorted(joints) == sorted(f"{n}{k}" for n in FOUR_FINGERS for k in (1, 2, 3))  # no Ring slots
+    for finger, z in (("Index", 0.133), ("Middle", 0.0), ("Pinky", -0.133)):  # the three boxes' centres
+        assert all(abs(joints[f"{finger}{k}"][2] - z) < 0.02 for k in (1, 2, 3))
+    assert 0.3 < joints["Middle1"][0] < joints["Middle3"][0] < 0.8
+
+
+def test_a_five_fingered_hand_cannot_be_read_as_four_fingered():
+    v, f = left_hand(fingers=True)
+    joints, info = template_fingers(v, f, WRIST, ELBOW, FORWARD, "Left", (FOUR_FINGERS,))
+    assert joints is None and "three fingers" in info["reason"]
+
+
+def test_hands_that_disagree_are_both_read_as_four_fingered():
+    """Left: three touching fingers. Right (mirrored at x < 0): four, one of them short, as a held prop or a fold
+    would add one; read again as four-fingered, both hands get 12 joints."""
+    from simcore.skeleton.hands import fit_fingers
+
+    left_v, left_f = left_hand(fingers=True, count=3)
+    parts = [box([0.4, -0.04, z], [0.8 if z != -0.2 else 0.62, 0.04, z + 0.096]) for z in (-0.2, -0.1, 0.0, 0.1)]
+    right = joined([box([-0.2, -0.05, -0.2], [0.4, 0.05, 0.2]), *parts]).subdivide().subdivide()
+    right_v = np.asarray(right.vertices) * np.array([-1.0, 1.0, 1.0]) - np.array([2.0, 0.0, 0.0])
+    right_f = np.asarray(right.faces)[:, ::-1]
+    vertices = np.vstack([left_v, right_v])
+    faces = np.vstack([left_f, right_f + len(left_v)])
+    body = {"LeftHand": WRIST, "LeftForeArm": ELBOW, "RightHand": np.array([-2.0, 0.0, 0.0]),
+            "RightForeArm": np.array([-1.0, 0.0, 0.0])}
+    joints, report = fit_fingers(vertices, faces, body, np.array([0.0, 1.0, 0.0]), FORWARD, np.array([1.0, 0, 0]))
+    assert joints is not None, report
+    assert len(joints) == 24 and "LeftHandRing1" not in joints and "RightHandRing1" not in joints
+    assert "read_again" in report["right"]

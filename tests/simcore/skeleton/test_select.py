@@ -58,6 +58,30 @@ def test_a_skeleton_with_joints_outside_and_stacked_scores_lower(dog):
     assert max(score_candidate(outside, shape).total, score_candidate(stacked, shape).total) < base.total
 
 
+def _with_fingers(truth: Skeleton) -> Skeleton:
+    """The truth with a chain of three finger joints (JointKind.HAND), 2 mm apart, on each of its leaves."""
+    leaves = [j for j in range(truth.num_joints) if j not in set(truth.parents.tolist())]
+    positions, parents = list(truth.positions), list(truth.parents)
+    names, kinds = list(truth.names), list(truth.kinds)
+    for leaf in leaves:
+        for k in range(3):
+            positions.append(truth.positions[leaf] + np.array([0.002 * (k + 1), 0.0, 0.0]))
+            parents.append(leaf if k == 0 else len(positions) - 2)
+            names.append(f"finger{leaf}_{k}")
+            kinds.append(JointKind.HAND)
+    return Skeleton(np.array(positions), np.array(parents), names, kinds)
+
+
+def test_auto_does_not_hold_finger_joints_against_a_candidate(dog):
+    _, _, truth, shape = dog
+    fingered = _with_fingers(truth)
+    assert score_candidate(fingered, shape).stacked > 0.5  # finger bones are shorter than the score resolves
+    pool = [Candidate(fingered, "humanoid"), Candidate(truth, "geometric")]
+    selection = select_candidate(pool, shape, margin=1e-9)
+    assert selection.chosen.method == "humanoid"  # scored as its body alone: the same score as the truth
+    assert selection.scores[0].total == pytest.approx(selection.scores[1].total)
+
+
 def test_auto_reports_every_candidate_and_why_one_won(dog):
     vertices, faces, _, _ = dog
     prediction = predict_skeleton(vertices, faces, method="auto")
