@@ -34,8 +34,9 @@ from simcore.skeleton.inside import snap_inside
 from simcore.skeleton.medial import medial_forest
 from simcore.skeleton.mixamo import BODY_JOINTS, BODY_PARENTS, HAND_JOINTS, HAND_PARENTS, full_name
 from simcore.skeleton.section_centre import centre_in_section
+from simcore.skeleton.spine_chain import SPINE, kept_spine
 from simcore.skeleton.symmetry import body_mirror, mirror_report, mirror_twins, symmetrize
-from simcore.skeleton.types import JointKind, Skeleton
+from simcore.skeleton.types import SHORT_BONE, JointKind, Skeleton
 
 UP_ORDER = ("y", "z", "-y", "-z", "x", "-x")  # glTF's +Y first: it wins ties
 CONFIDENT = 0.5
@@ -255,6 +256,22 @@ def _arm_share(length: float, total: float) -> float:
     return float(np.clip(length / max(total, 1e-9), 0.05, 0.4))
 
 
+def _short_spine(skeleton: Skeleton, size: float, report: dict[str, Any]) -> Skeleton:
+    """The skeleton with only the spine joints its torso carries (`spine_chain`); report["spine_joints"] says how
+    many when fewer than three."""
+    index = {n: k for k, n in enumerate(skeleton.names)}
+    chain = skeleton.positions[[index[full_name(n)] for n in ("Hips", *SPINE, "Neck")]]
+    kept = kept_spine(chain, SHORT_BONE * size)
+    if len(kept) == len(SPINE):
+        return skeleton
+    report["spine_joints"] = len(kept)
+    drop = np.zeros(skeleton.num_joints, dtype=bool)
+    drop[[index[full_name(SPINE[i])] for i in range(len(SPINE)) if i not in kept]] = True
+    rename = {full_name(SPINE[i]): full_name(SPINE[rank]) for rank, i in enumerate(kept)}
+    shorter, _ = skeleton.without(drop)
+    return replace(shorter, names=[rename.get(n, n) for n in shorter.names])
+
+
 def _place_body(tree: _Tree, biped: _Biped, left: np.ndarray, forward: np.ndarray) -> dict[str, np.ndarray]:
     up, floor, height = biped.up, biped.floor, biped.height
     j: dict[str, np.ndarray] = {}
@@ -451,7 +468,7 @@ def fit_humanoid(vertices: np.ndarray, faces: np.ndarray, *, max_joints: int = 6
     twins = None if plane is None else mirror_twins(pos, np.asarray(parents), grid, plane, names)
     report["mirror"] = mirror_report(twins)
     pos = snap_inside(grid, pos if twins is None else symmetrize(pos, twins))
-    skeleton = Skeleton(pos, np.asarray(parents), names, kinds).validate()
+    skeleton = _short_spine(Skeleton(pos, np.asarray(parents), names, kinds).validate(), scale, report)
     report.update(detected=True, facing=_facing_label(forward), facing_vector=np.round(forward, 4).tolist(),
                   facing_confidence=round(facing_conf, 3), joints=skeleton.num_joints)
     return HumanoidFit(skeleton, report)
