@@ -4,7 +4,9 @@ The Mixamo template puts three (Spine, Spine1, Spine2) between Hips and Neck. On
 a big head) its bones come out shorter than `SHORT_BONE` × the mesh's size: joints nearly in one place, which an
 animator cannot pick apart and `candidate_score`'s `stacked` term counts against the whole candidate. Such a torso
 keeps the most spine joints whose bones are all long enough (among equal counts, the layout whose shortest bone is
-the longest), renamed Spine, Spine1 … in order, as Mixamo's own lighter skeletons name them.
+the longest), renamed Spine, Spine1 … in order, as Mixamo's own lighter skeletons name them. It keeps one at
+least, even with short bones: a clip's spine motion needs a joint between Hips and Neck to go to (with none,
+qspace_enemy_large's own walk and run stretched its torso to twice the artist's rig).
 """
 
 from __future__ import annotations
@@ -25,11 +27,11 @@ def kept_spine(chain: np.ndarray, min_bone: float) -> tuple[int, ...]:
     """Indices into SPINE of the spine joints to keep (ascending).
 
     chain: (5, 3) positions of Hips, Spine, Spine1, Spine2, Neck; min_bone: the shortest bone allowed (metres).
-    All three when every bone is long enough; () when not even one joint leaves two long enough bones.
+    All three when every bone is long enough; one at least, the one that halves the torso best.
     """
     chain = np.asarray(chain, dtype=np.float64)
     for count in range(len(SPINE), 0, -1):
         best = max(combinations(range(len(SPINE)), count), key=lambda kept: _shortest_bone(chain, kept))
-        if _shortest_bone(chain, best) >= min_bone:
-            return best
-    return ()
+        if count == 1 or _shortest_bone(chain, best) >= min_bone:
+            break
+    return best
