@@ -41,7 +41,7 @@ if TYPE_CHECKING:
 
 PREDICTED_METHODS = ("auto", "geometric", "humanoid", "learned")
 CANDIDATE_METHODS = ("humanoid", "geometric")  # the rows `all` takes from auto's candidates
-METHODS = ("all", "voxel", *PREDICTED_METHODS)
+METHODS = ("voxel", *PREDICTED_METHODS)  # what `--method` names besides "all" (`resolve_methods`)
 __all__ = ["AssetResult", "EvalCase", "SkeletonEvaluation", "evaluate_asset", "evaluate_directory", "load_case",
            "read_categories", "resolve_methods"]
 JOINT_RATIO = (0.5, 2.0)  # a predicted joint count within this factor of the artist's is plausible
@@ -129,7 +129,7 @@ class SkeletonEvaluation:
 
 def resolve_methods(method: str | Sequence[str]) -> list[str]:
     """The methods `--method` values stand for ("all" = the voxel baseline, auto with its candidates, learned)."""
-    return listed_methods(method, METHODS[1:], ("voxel", "auto", "learned"), "method")
+    return listed_methods(method, METHODS, ("voxel", "auto", "learned"), "method")
 
 
 @dataclass

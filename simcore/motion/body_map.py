@@ -52,7 +52,7 @@ def _region_cost(source: Skeleton, target: Skeleton, shares: np.ndarray | None =
     bones = joint_segments(source)
     middles = 0.5 * (bones.heads + bones.tails)
     dist = joint_distances(points, bones, source.num_joints)  # (P, Js)
-    dist += TIE_BREAK * joint_distances(points, JointSegments(middles, middles, bones.owner), source.num_joints)
+    dist += TIE_BREAK * joint_distances(points, JointSegments(middles, middles, bones.owner, bones.leaf), source.num_joints)
     total = np.zeros((target.num_joints, source.num_joints))
     np.add.at(total, owner, dist)
     cost = total / np.bincount(owner, minlength=target.num_joints)[:, None]

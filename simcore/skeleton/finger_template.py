@@ -32,9 +32,10 @@ TEMPLATE: dict[str, tuple[tuple[float, float, float], ...]] = {
     "Pinky": ((0.46, -0.19, 0.1), (0.6, -0.19, 0.1), (0.72, -0.19, 0.1)),
 }
 SLICES = (0.6, 0.65, 0.7, 0.75, 0.8)  # × hand length: planes through the fingers, past the knuckles
-FINGER_LOOPS = {len(FINGERS): 4, len(FOUR_FINGERS): 3}  # section loops (fingers past the thumb) per hand kind
+# The finger sets a hand may have, tried in this order, with the section loops (fingers past the thumb) each shows.
+FINGER_LOOPS: dict[tuple[str, ...], int] = {FINGERS: 4, FOUR_FINGERS: 3}
+HAND_KINDS = tuple(FINGER_LOOPS)
 AGREEING_PLANES = 2  # planes that must reach a loop count for it to count
-HAND_KINDS = (FINGERS, FOUR_FINGERS)  # the finger sets a hand may have, tried in this order
 
 
 def section_loops(vertices: np.ndarray, faces: np.ndarray, origin: np.ndarray, normal: np.ndarray) -> list[np.ndarray]:
@@ -64,7 +65,7 @@ def finger_names(loop_counts: list[int], kinds: tuple[tuple[str, ...], ...] = HA
     """The fingers a hand shows from its planes' loop counts: the first of `kinds` whose FINGER_LOOPS at least
     AGREEING_PLANES planes reach; None for a mitten."""
     reached = sorted(loop_counts, reverse=True)[AGREEING_PLANES - 1] if len(loop_counts) >= AGREEING_PLANES else 0
-    return next((f for f in kinds if reached >= FINGER_LOOPS[len(f)]), None)
+    return next((f for f in kinds if reached >= FINGER_LOOPS[f]), None)
 
 
 def template_fingers(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray, elbow: np.ndarray,
@@ -90,7 +91,7 @@ def template_fingers(vertices: np.ndarray, faces: np.ndarray, wrist: np.ndarray,
     sections = [section_loops(vertices, faces, wrist + s * length * along_dir, along_dir) for s in SLICES]
     loops = [len(c) for c in sections]
     names = finger_names(loops, kinds)
-    three = [np.array(c) - wrist for c in sections if len(c) == FINGER_LOOPS[len(FOUR_FINGERS)]]
+    three = [np.array(c) - wrist for c in sections if len(c) == FINGER_LOOPS[FOUR_FINGERS]]
     if names == FOUR_FINGERS and not three:
         return None, {"reason": "no finger section shows three fingers", "loops": loops}
     if names is None:

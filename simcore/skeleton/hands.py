@@ -13,6 +13,7 @@ shells and lays the joints out from the Mixamo hand template instead (report: "f
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -94,24 +95,34 @@ def _one_hand(grid: VoxelGrid, sub_v: np.ndarray, wrist: np.ndarray, elbow: np.n
     return out, {"tips": len(leaves) - 1, "fingers": len(names)}
 
 
+@dataclass
+class _Hand:
+    """One hand's finger joints (bare names without the side → (3,)), its finger set (a HAND_KINDS entry) and
+    whether the template placed them."""
+
+    joints: dict[str, np.ndarray]
+    kind: tuple[str, ...]
+    template: bool
+
+
 def _fit_hand(v: np.ndarray, f: np.ndarray, wrist: np.ndarray, elbow: np.ndarray, forward: np.ndarray, side: str,
-              kinds: tuple[tuple[str, ...], ...]) -> tuple[dict[str, np.ndarray] | None, dict[str, Any], bool]:
-    """One hand's fingers (bare names without the side → (3,)) from its medial tree, else from the template;
-    with the report and whether the template placed them."""
+              kinds: tuple[tuple[str, ...], ...]) -> tuple[_Hand | None, dict[str, Any]]:
+    """One hand's fingers from its medial tree, else from the template, with the report."""
     crop = _hand_crop(v, f, wrist, elbow)
     if crop is None:
-        return None, {"reason": "too few triangles around the hand"}, False
+        return None, {"reason": "too few triangles around the hand"}
     grid = solid_voxels(crop[0], crop[1], resolution=HAND_RESOLUTION)
     fingers, info = _one_hand(grid, crop[0], wrist, elbow, forward, kinds)
-    if fingers is not None:
-        return fingers, info, False
-    # touching fingers: the mesh's sections can still show them
-    fingers, template_info = template_fingers(crop[0], crop[1], wrist, elbow, forward, side, kinds)
-    info = {**info, "fallback": template_info}
+    template = fingers is None
+    if template:  # touching fingers: the mesh's sections can still show them
+        fingers, template_info = template_fingers(crop[0], crop[1], wrist, elbow, forward, side, kinds)
+        info = {**info, "fallback": template_info}
+        if fingers is not None:  # the template knows proportions, not this hand's surface
+            fingers = dict(zip(fingers, snap_inside(grid, np.array(list(fingers.values())))))
     if fingers is None:
-        return None, info, False
-    names = list(fingers)  # the template knows proportions, not this hand's surface
-    return dict(zip(names, snap_inside(grid, np.array([fingers[n] for n in names])))), info, True
+        return None, info
+    kind = next(k for k in kinds if set(k) == {n.rstrip("0123456789") for n in fingers})  # "Index2" → "Index"
+    return _Hand(fingers, kind, template), info
 
 
 def fit_fingers(vertices: np.ndarray, faces: np.ndarray, body: dict[str, np.ndarray], up: np.ndarray,
@@ -125,24 +136,22 @@ def fit_fingers(vertices: np.ndarray, faces: np.ndarray, body: dict[str, np.ndar
     """
     v, f = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
     report: dict[str, Any] = {}
-    hands: dict[str, tuple[dict[str, np.ndarray], bool]] = {}
+    hands: dict[str, _Hand] = {}
     for side in ("Left", "Right"):
-        fingers, report[side.lower()], template_used = _fit_hand(
-            v, f, body[f"{side}Hand"], body[f"{side}ForeArm"], forward, side, HAND_KINDS)
-        if fingers is None:
+        hand, report[side.lower()] = _fit_hand(v, f, body[f"{side}Hand"], body[f"{side}ForeArm"], forward, side,
+                                               HAND_KINDS)
+        if hand is None:
             report["separable"] = False
             return None, report
-        hands[side] = fingers, template_used
-    more, fewer = sorted(hands, key=lambda s: (-len(hands[s][0]), s))
-    if len(hands[more][0]) != len(hands[fewer][0]):
-        kind = next(k for k in HAND_KINDS if 3 * len(k) == len(hands[fewer][0]))
-        fingers, info, template_used = _fit_hand(v, f, body[f"{more}Hand"], body[f"{more}ForeArm"], forward, more,
-                                                 (kind,))
+        hands[side] = hand
+    more, fewer = sorted(hands, key=lambda s: (-len(hands[s].kind), s))
+    if hands[more].kind != hands[fewer].kind:
+        again, info = _fit_hand(v, f, body[f"{more}Hand"], body[f"{more}ForeArm"], forward, more, (hands[fewer].kind,))
         report[more.lower()] = {**report[more.lower()], "read_again": info}
-        if fingers is None:
+        if again is None:
             report.update(separable=False, reason="the hands show different finger counts")
             return None, report
-        hands[more] = fingers, template_used
+        hands[more] = again
     report["separable"] = True
-    report["template"] = any(t for _, t in hands.values())
-    return {f"{side}Hand{k}": p for side, (fingers, _) in hands.items() for k, p in fingers.items()}, report
+    report["template"] = any(hand.template for hand in hands.values())
+    return {f"{side}Hand{k}": p for side, hand in hands.items() for k, p in hand.joints.items()}, report

@@ -5,8 +5,8 @@ a big head) its bones come out shorter than `SHORT_BONE` × the mesh's size: joi
 animator cannot pick apart and `candidate_score`'s `stacked` term counts against the whole candidate. Such a torso
 keeps the most spine joints whose bones are all long enough (among equal counts, the layout whose shortest bone is
 the longest), renamed Spine, Spine1 … in order, as Mixamo's own lighter skeletons name them. It keeps one at
-least, even with short bones: a clip's spine motion needs a joint between Hips and Neck to go to (with none,
-qspace_enemy_large's own walk and run stretched its torso to twice the artist's rig).
+least, even with short bones: a clip's spine motion needs a joint between Hips and Neck to go to, or the torso
+stretches where the artist's rig bends it.
 """
 
 from __future__ import annotations
@@ -32,6 +32,6 @@ def kept_spine(chain: np.ndarray, min_bone: float) -> tuple[int, ...]:
     chain = np.asarray(chain, dtype=np.float64)
     for count in range(len(SPINE), 0, -1):
         best = max(combinations(range(len(SPINE)), count), key=lambda kept: _shortest_bone(chain, kept))
-        if count == 1 or _shortest_bone(chain, best) >= min_bone:
-            break
-    return best
+        if _shortest_bone(chain, best) >= min_bone:
+            return best
+    return best  # the single joint that halves the torso best, short bones and all

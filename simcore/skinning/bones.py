@@ -26,12 +26,12 @@ TIE = 1e-9  # relative distance within which a point is as near to two segments
 @dataclass
 class JointSegments:
     """heads, tails: (S, 3) float64 segment end points; owner: (S,) int64 joint owning each segment; leaf: (S,)
-    bool, the segment of a joint with no bone to a child (None: not known)."""
+    bool, the segment of a joint with no bone to a child."""
 
     heads: np.ndarray
     tails: np.ndarray
     owner: np.ndarray
-    leaf: np.ndarray | None = None
+    leaf: np.ndarray
 
 
 def _repeated(positions: np.ndarray) -> np.ndarray:
@@ -80,7 +80,7 @@ def leaf_tails(segments: JointSegments, points: np.ndarray, extension: float) ->
     out. A leaf no point lies nearest to, or whose part lies all around it rather than to one side (the mean offset
     under LEAF_COHERENCE × the mean distance), keeps its segment."""
     leaf = segments.leaf
-    if leaf is None or not leaf.any() or len(points) == 0:
+    if not leaf.any() or len(points) == 0:
         return segments
     tails = segments.tails.copy()
     tails[leaf] = segments.heads[leaf]
