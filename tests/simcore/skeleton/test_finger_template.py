@@ -93,8 +93,59 @@ def test_hands_that_disagree_are_both_read_as_four_fingered():
     vertices = np.vstack([left_v, right_v])
     faces = np.vstack([left_f, right_f + len(left_v)])
     body = {"LeftHand": WRIST, "LeftForeArm": ELBOW, "RightHand": np.array([-2.0, 0.0, 0.0]),
-            "RightForeArm": np.array([-1.0, 0.0, 0.0])}
+            "RightForeArm": np.array([-1.0, 0.0, 0.0]), "Hips": np.array([-1.0, -1.0, 0.0])}
     joints, report = fit_fingers(vertices, faces, body, np.array([0.0, 1.0, 0.0]), FORWARD, np.array([1.0, 0, 0]))
     assert joints is not None, report
     assert len(joints) == 24 and "LeftHandRing1" not in joints and "RightHandRing1" not in joints
     assert "read_again" in report["right"]
+
+
+def _two_hands(right_fingers: bool, prop: bool) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """A three-fingered left hand and, mirrored across x = -1, a right hand with those fingers or a mitten, holding
+    a separate prop (a plate over the palm, more than half a forearm away from the other hand's mirror image) when
+    `prop`; with the body joints."""
+    left_v, left_f = left_hand(fingers=True, count=3)
+    right = left_hand(fingers=right_fingers, count=3)
+    right_v, right_f = right[0] * np.array([-1.0, 1.0, 1.0]) - np.array([2.0, 0.0, 0.0]), right[1][:, ::-1]
+    meshes = [(left_v, left_f), (right_v, right_f)]
+    if prop:
+        bar = box([-2.5, 0.6, -0.2], [-2.2, 0.7, 0.2]).subdivide().subdivide()
+        meshes.append((np.asarray(bar.vertices), np.asarray(bar.faces)))
+    offsets = np.cumsum([0] + [len(v) for v, _ in meshes[:-1]])
+    vertices = np.vstack([v for v, _ in meshes])
+    faces = np.vstack([f + o for (_, f), o in zip(meshes, offsets)])
+    body = {"LeftHand": WRIST, "LeftForeArm": ELBOW, "RightHand": np.array([-2.0, 0.0, 0.0]),
+            "RightForeArm": np.array([-1.0, 0.0, 0.0]), "Hips": np.array([-1.0, -1.0, 0.0])}
+    return vertices, faces, body
+
+
+def _fingers(right_fingers: bool, prop: bool):
+    from simcore.skeleton.hands import fit_fingers
+
+    vertices, faces, body = _two_hands(right_fingers, prop)
+    return fit_fingers(vertices, faces, body, np.array([0.0, 1.0, 0.0]), FORWARD, np.array([1.0, 0, 0]))
+
+
+def test_a_prop_held_in_one_hand_is_left_out_of_its_reading():
+    joints, report = _fingers(right_fingers=True, prop=True)
+    assert joints is not None, report
+    assert report["right"]["prop_triangles"] > 0 and "prop_triangles" not in report["left"]
+    assert "mirrored_from" not in report["right"]  # read off its own surface
+    for name in (n for n in joints if n.startswith("LeftHand")):  # the two hands' joints are mirror images
+        mirrored = joints[name] * np.array([-1.0, 1.0, 1.0]) - np.array([2.0, 0.0, 0.0])
+        assert np.linalg.norm(joints[name.replace("Left", "Right")] - mirrored) < 0.05
+
+
+def test_a_hand_whose_grip_hides_its_fingers_mirrors_the_other_hand():
+    joints, report = _fingers(right_fingers=False, prop=True)
+    assert joints is not None, report
+    assert report["right"]["mirrored_from"] == "left"
+    assert len(joints) == 24
+    mirrored = joints["LeftHandMiddle2"] * np.array([-1.0, 1.0, 1.0]) - np.array([2.0, 0.0, 0.0])
+    assert np.allclose(joints["RightHandMiddle2"], mirrored)
+
+
+def test_a_mitten_without_a_prop_is_not_given_the_other_hands_fingers():
+    joints, report = _fingers(right_fingers=False, prop=False)
+    assert joints is None and report["separable"] is False
+    assert "mirrored_from" not in report["right"]
