@@ -179,7 +179,7 @@ def _detect(tree: _Tree, up: np.ndarray, vertices: np.ndarray) -> _Biped | None:
     leg_len = (path_length(tree.pos, depth_path[foot_a][: depth_path[foot_a].index(pelvis) + 1]),
                path_length(tree.pos, depth_path[foot_b][: depth_path[foot_b].index(pelvis) + 1]))
     checks = {
-        "head_on_top": _soft(rel[head], 0.9, 1.01, 0.1),
+        "head_on_top": _soft(rel[head] + float(tree.radius[head]) / height, 0.9, 1.01, 0.1),  # the ball reaches up
         "crotch_height": _soft(rel[pelvis], 0.25, 0.62, 0.1),
         "arms_above_crotch": _soft(min(rel[shoulders[0]], rel[shoulders[1]]) - rel[pelvis], 0.15, 1.0, 0.1),
         "arm_symmetry": _soft(min(arm_len) / max(arm_len), 0.7, 1.0, 0.2),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 
 from simcore.geometry.capsule_creatures import quadruped, stick_humanoid
 from simcore.io.gltf_document import GltfDocument
@@ -192,3 +193,15 @@ def test_hands_straight_above_each_other_give_no_facing_instead_of_nan() -> None
     biped = _Biped(up, 1.0, {}, 0.0, 1.0, {0: -1}, 0, (0, 0), 0, (0, 0), (0, 0))
     with pytest.raises(_NotBiped, match="along the up axis"):
         _facing(tree, biped, [], np.zeros(3), None)  # the hands' offset projected off the up axis is nothing
+
+
+def test_a_big_round_head_counts_as_on_top():
+    """A helmet-like ball for a head: its medial tip is the ball's centre, 0.35 m under the top of the model; the
+    ball's radius reaches the top, so the biped is found."""
+    vertices, faces, _ = stick_humanoid()
+    helmet = trimesh.creation.icosphere(subdivisions=3, radius=0.35)
+    helmet.apply_translation([0.0, 1.75, 0.0])
+    mesh = joined([trimesh.Trimesh(vertices, faces, process=False), helmet])
+    fit = fit_humanoid(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    assert fit.skeleton is not None, fit.report
+    assert fit.report["checks"]["head_on_top"] > 0.9
