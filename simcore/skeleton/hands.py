@@ -152,9 +152,12 @@ def fit_fingers(vertices: np.ndarray, faces: np.ndarray, body: dict[str, np.ndar
     """The finger joints (bare Mixamo names → (3,) positions) when both hands show fingers, else None: 30 joints,
     or 24 when the hands have four fingers each.
 
-    When one hand reads as five-fingered and the other as four, the five-fingered one is read again as
-    four-fingered: a held prop or a fold adds a loop or a tip more often than touching fingers hide one.
-    body: bare Mixamo body joint name → (3,) position (needs LeftHand/LeftForeArm and the Right pair).
+    Held props are left out of each hand's crop first (`_props_left_out`); a hand that then shows no fingers
+    while the other does takes the other's, mirrored. When one hand reads as five-fingered and the other as four,
+    the five-fingered one is read again as four-fingered: a fold adds a loop or a tip more often than touching
+    fingers hide one.
+    body: bare Mixamo body joint name → (3,) position (needs LeftHand/LeftForeArm, the Right pair, and Hips on the
+    body's midplane).
     """
     v, f = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
     report: dict[str, Any] = {}
